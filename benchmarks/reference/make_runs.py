@@ -1,0 +1,181 @@
+"""Write held-out reference runs, in the thesis's file formats, for any wheel-command pattern.
+
+The MuJoCo reference (skid4_mujoco.py, parameters in surfaces.yaml) drives the pattern; the
+output looks exactly like the bundled sample runs so the project's readers, calibration and
+validation can consume it unchanged:
+
+- ``<surface>_<pattern>.ssv``: t, measured wL, measured wR, heading, X, Y at 100 Hz (5 decimals);
+- ``<surface>_<pattern>_truth.txt``: t X Y heading at 100 Hz (4 decimals);
+- ``<surface>_<pattern>_encoders.txt``: time_ms, left_ticks, right_ticks (tab-separated, ~38 Hz,
+  25-28 ms jitter from a seeded generator, cumulative ticks floored from the wheel angle).
+
+    python benchmarks/reference/make_runs.py --pattern-npz P.npz --surface concrete --out DIR \\
+        --heading0-deg 180
+    python benchmarks/reference/make_runs.py --demo --surface hardsand --out DIR  # square-spiral-line
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from skid4_mujoco import REPO, load_robot, load_surfaces, simulate
+
+RATE_HZ = 100
+ENCODER_DT_MS = (25, 28)  # inclusive range of the sample logs' intervals (mean 26.5 ms, ~38 Hz)
+
+
+def _wrap(a: np.ndarray) -> np.ndarray:
+    return np.angle(np.exp(1j * a))
+
+
+def encoder_log(
+    t_s: np.ndarray, left_rad: np.ndarray, right_rad: np.ndarray, ticks_per_rev: int, seed: int
+) -> np.ndarray:
+    """Rows (time_ms, left_ticks, right_ticks) at jittered ~38 Hz, ticks floored from wheel angle."""
+    rng = np.random.default_rng(seed)
+    end_ms = round(1000 * (t_s[-1] - t_s[0]))
+    times = [0]
+    while True:
+        nxt = times[-1] + int(rng.integers(ENCODER_DT_MS[0], ENCODER_DT_MS[1] + 1))
+        if nxt > end_ms:
+            break
+        times.append(nxt)
+    tm = np.asarray(times)
+    ts = t_s[0] + tm / 1000.0
+    k = ticks_per_rev / (2 * math.pi)
+    left = np.floor(np.interp(ts, t_s, left_rad) * k + 1e-9).astype(int)
+    right = np.floor(np.interp(ts, t_s, right_rad) * k + 1e-9).astype(int)
+    return np.column_stack([tm, left, right])
+
+
+def make_run(
+    t_s: np.ndarray,
+    left_radps: np.ndarray,
+    right_radps: np.ndarray,
+    surface: str,
+    pattern: str,
+    out_dir: Path,
+    heading0_rad: float,
+    seed: int = 0,
+) -> dict[str, Path]:
+    """Simulate a commanded pattern on a surface and write its three files; returns their paths.
+
+    Commands may be at any rate; the run is sampled at 100 Hz from t_s[0] (time reset to 0).
+    ``seed`` draws the soft-sand lumps and the encoder timing jitter.
+    """
+    t_s = np.asarray(t_s, dtype=float)
+    dur = t_s[-1] - t_s[0]
+    t = np.round(np.arange(0, round(dur * RATE_HZ) + 1) / RATE_HZ, 6)
+    left = np.interp(t, t_s - t_s[0], left_radps)
+    right = np.interp(t, t_s - t_s[0], right_radps)
+    sim = simulate(t, left, right, surface, heading0_rad, seed=seed)
+    heading = _wrap(sim["heading_rad"])
+
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    stem = out_dir / f"{surface}_{pattern}"
+    paths = {
+        "ssv": stem.with_name(stem.name + ".ssv"),
+        "truth": stem.with_name(stem.name + "_truth.txt"),
+        "encoders": stem.with_name(stem.name + "_encoders.txt"),
+    }
+    ssv = np.column_stack([t, sim["left_radps"], sim["right_radps"], heading, sim["x_m"], sim["y_m"]])
+    np.savetxt(paths["ssv"], ssv, fmt="%.5f", delimiter=" ")
+    truth = np.column_stack([t, sim["x_m"], sim["y_m"], heading])
+    np.savetxt(paths["truth"], truth, fmt="%.4f", delimiter=" ")
+    ticks = int(load_robot()["encoder_ticks_per_wheel_rev"])
+    enc = encoder_log(t, sim["left_rad"], sim["right_rad"], ticks, seed)
+    np.savetxt(paths["encoders"], enc, fmt="%d", delimiter="\t")
+    return paths
+
+
+def square_spiral_line() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Hand-made ~60 s test pattern: the sample square's wheel speeds, a ~180 deg pivot at +-4 rad/s,
+    a counter-clockwise tightening spiral with rising speed, then an accelerating straight.
+
+    Only for testing this tool; the project's real patterns come from swarm/robot/patterns.py.
+    """
+    sq = np.loadtxt(REPO / "swarm" / "data" / "robot-runs" / "concrete_square.ssv")
+    dt = 1.0 / RATE_HZ
+    parts_l, parts_r = [sq[:, 1]], [sq[:, 2]]
+
+    def ramp(n_total: int, n_ramp: int) -> np.ndarray:
+        env = np.ones(n_total)
+        up = np.linspace(0.0, 1.0, n_ramp)
+        env[:n_ramp], env[-n_ramp:] = up, up[::-1]
+        return env
+
+    n = int(4.5 / dt)  # pivot: about 180 deg on concrete with 0.3 s ramps
+    env = ramp(n, int(0.3 / dt))
+    parts_l.append(-4.0 * env)
+    parts_r.append(4.0 * env)
+
+    n = int(18.0 / dt)  # spiral: mean 3 -> 6 rad/s, right-left 1.5 -> 7 rad/s (radius ~2.2 -> ~0.9 m)
+    s = np.linspace(0.0, 1.0, n)
+    env = np.minimum(1.0, s * 18.0 / 0.5)  # 0.5 s start-up ramp
+    mean_end, diff_end = 6.0, 7.0
+    mean = (3.0 + (mean_end - 3.0) * s) * env
+    diff = (1.5 + (diff_end - 1.5) * s) * env
+    parts_l.append(mean - diff / 2)
+    parts_r.append(mean + diff / 2)
+
+    n = int(11.5 / dt)  # straight: blend out the turn over 1 s, accelerate 6 -> 8.5 rad/s, stop
+    s = np.linspace(0.0, 1.0, n)
+    blend = np.clip(1.0 - s * 11.5, 0.0, 1.0)
+    mean = mean_end + 2.5 * s
+    end_ramp = np.clip((1.0 - s) * 11.5 / 0.8, 0.0, 1.0)  # stop over the last 0.8 s
+    parts_l.append((mean - diff_end / 2 * blend) * end_ramp)
+    parts_r.append((mean + diff_end / 2 * blend) * end_ramp)
+
+    left = np.concatenate(parts_l)
+    right = np.concatenate(parts_r)
+    t = np.arange(len(left)) * dt
+    return t, left, right
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description="Write a held-out reference run in the thesis formats.")
+    src = ap.add_mutually_exclusive_group(required=True)
+    src.add_argument("--pattern-npz", type=Path, help="npz with arrays t_s, left_radps, right_radps")
+    src.add_argument("--demo", action="store_true", help="use the built-in square-spiral-line test pattern")
+    ap.add_argument("--surface", required=True, choices=sorted(load_surfaces()), help="see surfaces.yaml")
+    ap.add_argument("--out", type=Path, required=True, help="output folder")
+    ap.add_argument("--pattern", help="pattern name in file names (default: npz stem or square_spiral_line)")
+    ap.add_argument(
+        "--heading0-deg",
+        type=float,
+        default=None,
+        help="initial heading, degrees CCW from +X (default 180 for --demo, else 0)",
+    )
+    ap.add_argument("--seed", type=int, default=0, help="soft-sand lumps and encoder jitter")
+    ap.add_argument("--save-demo-npz", type=Path, help="with --demo: also save the commands as npz")
+    args = ap.parse_args()
+
+    if args.demo:
+        t, left, right = square_spiral_line()
+        pattern = args.pattern or "square_spiral_line"
+        heading0 = 180.0 if args.heading0_deg is None else args.heading0_deg
+        if args.save_demo_npz:
+            np.savez(args.save_demo_npz, t_s=t, left_radps=left, right_radps=right)
+    else:
+        npz = np.load(args.pattern_npz)
+        t, left, right = npz["t_s"], npz["left_radps"], npz["right_radps"]
+        pattern = args.pattern or args.pattern_npz.stem
+        heading0 = 0.0 if args.heading0_deg is None else args.heading0_deg
+
+    t0 = time.time()
+    paths = make_run(t, left, right, args.surface, pattern, args.out, math.radians(heading0), args.seed)
+    print(f"{args.surface}_{pattern}: {t[-1] - t[0]:.1f} s simulated in {time.time() - t0:.1f} s")
+    for p in paths.values():
+        print(f"  {p}")
+
+
+if __name__ == "__main__":
+    main()

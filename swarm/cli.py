@@ -1,0 +1,272 @@
+"""The `swarm` command: parses arguments, calls the library, prints. Bad input: one line, exit 2."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+
+from swarm import __version__
+from swarm.errors import InputError, SwarmError
+
+EXIT_BAD_INPUT = 2
+
+
+def _parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="swarm",
+        description="Plan and simulate swarms of small skid-steered robots in the surf zone.",
+    )
+    parser.add_argument("--version", action="version", version=f"surf-swarm {__version__}")
+    commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+
+    model = commands.add_parser("model", help="robot motion models: validate against runs, calibrate")
+    model_cmds = model.add_subparsers(dest="model_command", required=True, metavar="ACTION")
+
+    def run_inputs(p: argparse.ArgumentParser, many: bool) -> None:
+        action = "append" if many else "store"
+        p.add_argument("--robot", required=True, type=Path, help="robot YAML (mass, geometry, encoder ticks)")
+        p.add_argument(
+            "--encoders", action=action, type=Path, help="encoder log: time_ms left_ticks right_ticks"
+        )
+        p.add_argument("--truth", action=action, type=Path, help="pose reference: t X Y heading")
+        p.add_argument(
+            "--ssv", action=action, type=Path, help="simulation export (.ssv) instead of encoders+truth"
+        )
+        p.add_argument("--counter-bits", type=int, help="encoder counter width, to unwrap counter overflow")
+        p.add_argument("--model", choices=("skid", "kinematic", "lagrangian"), default="skid")
+        p.add_argument("--terrain", type=Path, help="terrain-mode YAML overriding or adding to the defaults")
+        p.add_argument(
+            "--mode",
+            help="terrain mode the runs were on (default: the only mode in --terrain, else concrete)",
+        )
+
+    validate = model_cmds.add_parser(
+        "validate", help="run a model from the encoders and score it against truth"
+    )
+    run_inputs(validate, many=False)
+    validate.add_argument("--compare", action="store_true", help="also score the other two models")
+    validate.add_argument(
+        "--fixed-step",
+        type=float,
+        metavar="DT_S",
+        help="skid model: fixed step (s) instead of the adaptive integrator",
+    )
+    validate.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
+    validate.add_argument(
+        "--plot", type=Path, metavar="FIG.png", help="write the thesis-style overlay figure"
+    )
+    validate.set_defaults(handler=_cmd_validate)
+
+    calibrate = model_cmds.add_parser(
+        "calibrate", help="fit a model's terrain coefficients to one or more runs"
+    )
+    run_inputs(calibrate, many=True)
+    calibrate.add_argument("--name", help="name of the fitted mode in the output (default: --mode)")
+    calibrate.add_argument("--free", help="comma-separated parameters to fit (default: all the model has)")
+    calibrate.add_argument(
+        "--max-evaluations", type=int, default=60, help="least-squares budget (default 60)"
+    )
+    calibrate.add_argument("--json", action="store_true", help="print the result as JSON")
+    calibrate.add_argument("--out", required=True, type=Path, help="terrain-mode YAML to write")
+    calibrate.set_defaults(handler=_cmd_calibrate)
+    return parser
+
+
+def _check_output(path: Path | None, option: str, suffixes: tuple[str, ...]) -> None:
+    """Refuse an output we could not write before doing any work for it."""
+    if path is None:
+        return
+    if path.suffix.lower() not in suffixes:
+        raise InputError("command line", option, str(path), f"a file name ending in {', '.join(suffixes)}")
+    parent = path.parent if str(path.parent) else Path(".")
+    if not parent.is_dir():
+        raise InputError(
+            "command line", option, str(path), f"a file in an existing folder ({parent} is not one)"
+        )
+
+
+FIGURE_SUFFIXES = (".png", ".svg", ".pdf")
+
+
+def _choose_mode(args: argparse.Namespace):
+    from swarm.robot.terrain import library_from_dict, load_library
+
+    library = load_library(args.terrain)
+    name = args.mode
+    if name is None and args.terrain is not None:
+        import yaml
+
+        own = library_from_dict(yaml.safe_load(args.terrain.read_text()), args.terrain, library)
+        name = next(iter(own)) if len(own) == 1 else None
+        if name is None:
+            raise InputError(args.terrain, "modes", sorted(own), "one mode, or --mode NAME to choose")
+    name = name or "concrete"
+    if name not in library:
+        raise InputError(args.terrain or "--mode", "--mode", name, f"one of {sorted(library)}")
+    return library[name]
+
+
+def _runs(args: argparse.Namespace, robot) -> list:
+    from swarm.robot.runs import load_encoder_run, load_ssv_run
+
+    def listed(value):
+        return [] if value is None else value if isinstance(value, list) else [value]
+
+    encoders, truths, ssvs = listed(args.encoders), listed(args.truth), listed(args.ssv)
+    if ssvs and (encoders or truths):
+        raise InputError("command line", "--ssv", "--ssv with --encoders/--truth", "one or the other")
+    if len(encoders) != len(truths):
+        raise InputError(
+            "command line",
+            "--encoders/--truth",
+            f"{len(encoders)} logs and {len(truths)} truths",
+            "one --truth for each --encoders, in the same order",
+        )
+    if not encoders and not ssvs:
+        raise InputError(
+            "command line", "--encoders", "nothing", "--encoders E.txt --truth T.txt, or --ssv S.ssv"
+        )
+    runs = [load_encoder_run(robot, e, t, args.counter_bits) for e, t in zip(encoders, truths, strict=True)]
+    return runs + [load_ssv_run(s) for s in ssvs]
+
+
+def _table(rows: Sequence[Sequence[str]]) -> str:
+    widths = [max(len(r[i]) for r in rows) for i in range(len(rows[0]))]
+    lines = [
+        "  ".join(c.rjust(w) if j else c.ljust(w) for j, (c, w) in enumerate(zip(r, widths, strict=True)))
+        for r in rows
+    ]
+    lines.insert(1, "  ".join("-" * w for w in widths))
+    return "\n".join(lines)
+
+
+def _score_rows(scores) -> list[list[str]]:
+    rows = [["model", "run", "distance m", "final err m", "path RMSE m", "RMSE % dist", "heading RMSE deg"]]
+    for s in scores:
+        rows.append(
+            [
+                s.model,
+                s.run,
+                f"{s.distance_m:.2f}",
+                f"{s.final_error_m:.3f}",
+                f"{s.path_rmse_m:.3f}",
+                f"{s.path_rmse_pct:.2f}",
+                f"{s.heading_rmse_deg:.2f}",
+            ]
+        )
+    return rows
+
+
+def _cmd_validate(args: argparse.Namespace) -> int:
+    from swarm.robot.params import load_robot
+    from swarm.robot.validate import validate
+
+    _check_output(args.plot, "--plot", FIGURE_SUFFIXES)
+    robot = load_robot(args.robot)
+    mode = _choose_mode(args)
+    (run,) = _runs(args, robot)
+    models = [args.model] + (
+        [m for m in ("skid", "kinematic", "lagrangian") if m != args.model] if args.compare else []
+    )
+    opts = {} if args.fixed_step is None else {"adaptive": False, "dt_s": args.fixed_step}
+    results = {m: validate(run, robot, mode, m, **(opts if m == "skid" else {})) for m in models}
+    scores = {m: r[0] for m, r in results.items()}
+    if args.plot is not None:
+        from swarm.report.validation import plot_validation
+
+        plot_validation(run, {m: r[1] for m, r in results.items()}, scores, args.plot)
+    if args.json:
+        out = scores[args.model].as_dict()
+        if args.compare:
+            out["compare"] = [scores[m].as_dict() for m in models[1:]]
+        if args.plot is not None:
+            out["plot"] = str(args.plot)
+        print(json.dumps(out, indent=2))
+    else:
+        print(f"terrain mode: {mode.name}")
+        print(_table(_score_rows(scores.values())))
+        if args.plot is not None:
+            print(f"figure: {args.plot}")
+    return 0
+
+
+def _cmd_calibrate(args: argparse.Namespace) -> int:
+    from tqdm import tqdm
+
+    from swarm.robot.calibrate import MODEL_BOUNDS, calibrate, write_calibration
+    from swarm.robot.params import load_robot
+
+    _check_output(args.out, "--out", (".yaml", ".yml"))
+    robot = load_robot(args.robot)
+    base = _choose_mode(args)
+    runs = _runs(args, robot)
+    free = None
+    if args.free:
+        free = [f.strip() for f in args.free.split(",") if f.strip()]
+        for f in free:
+            if f not in MODEL_BOUNDS[args.model]:
+                raise InputError(
+                    "command line",
+                    "--free",
+                    f,
+                    f"parameters of the {args.model} model: {', '.join(MODEL_BOUNDS[args.model])}",
+                )
+    if args.max_evaluations < 1:
+        raise InputError("command line", "--max-evaluations", args.max_evaluations, "a positive integer")
+    with tqdm(desc=f"calibrating {args.model}", unit="sim", disable=args.json, file=sys.stderr) as bar:
+        result = calibrate(
+            runs,
+            robot,
+            base,
+            args.model,
+            free=free,
+            name=args.name,
+            max_evaluations=args.max_evaluations,
+            progress=bar.update,
+        )
+    write_calibration(args.out, result, robot, runs)
+    if args.json:
+        print(
+            json.dumps(
+                {
+                    "model": result.model,
+                    "mode": result.mode.name,
+                    "out": str(args.out),
+                    "parameters": result.parameters,
+                    "std_errors": result.std_errors,
+                    "before": [s.as_dict() for s in result.before],
+                    "after": [s.as_dict() for s in result.after],
+                },
+                indent=2,
+            )
+        )
+        return 0
+    rows = [["parameter", "fitted", "std error"]]
+    rows += [[k, f"{v:.4g}", f"{result.std_errors[k]:.2g}"] for k, v in result.parameters.items()]
+    print(_table(rows))
+    print()
+    before, after = _score_rows(result.before), _score_rows(result.after)
+    rows = [before[0]] + [[f"{r[0]} (start)", *r[1:]] for r in before[1:]]
+    rows += [[f"{r[0]} (fitted)", *r[1:]] for r in after[1:]]
+    print(_table(rows))
+    print(f"wrote terrain mode '{result.mode.name}' to {args.out}")
+    return 0
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    args = _parser().parse_args(argv)
+    try:
+        return args.handler(args)
+    except SwarmError as exc:
+        print(f"swarm: error: {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except KeyboardInterrupt:
+        print("swarm: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,1 @@
+"""One robot: parameters, terrain modes, motion models, encoder data, drive patterns, calibration."""

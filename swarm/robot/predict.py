@@ -1,0 +1,90 @@
+"""One entry point for the three motion models, so validation and calibration treat them alike."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+
+from swarm.robot.kinematic import kinematic
+from swarm.robot.lagrangian import lagrangian
+from swarm.robot.params import RobotParams
+from swarm.robot.skid import SkidModel, coeffs_for
+from swarm.robot.terrain import TerrainMode
+from swarm.robot.wheels import WheelInput
+
+MODELS = ("skid", "kinematic", "lagrangian")
+Model = Literal["skid", "kinematic", "lagrangian"]
+
+#: Fixed step for the skid model when it is not run adaptively (s); first-order, ~0.25% of
+#: distance from the converged answer on the sample square.
+FIXED_STEP_S = 0.005
+
+
+@dataclass(frozen=True, eq=False)
+class Trajectory:
+    t_s: np.ndarray
+    x_m: np.ndarray
+    y_m: np.ndarray
+    heading_rad: np.ndarray
+
+    def at(self, t_s: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Pose interpolated at other times (held at the ends)."""
+        return (
+            np.interp(t_s, self.t_s, self.x_m),
+            np.interp(t_s, self.t_s, self.y_m),
+            np.interp(t_s, self.t_s, self.heading_rad),
+        )
+
+
+def predict(
+    model: Model,
+    wheels: WheelInput,
+    robot: RobotParams,
+    mode: TerrainMode,
+    pose0: tuple[float, float, float] = (0.0, 0.0, 0.0),
+    *,
+    adaptive: bool = True,
+    dt_s: float = FIXED_STEP_S,
+) -> Trajectory:
+    """Where `model` says the robot goes on `mode` ground, driven by `wheels` from `pose0`.
+
+    The kinematic and Lagrangian models take their parameters from the mode's fitted values for
+    them (`mode.model_params`), falling back to the thesis's.
+    """
+    x0, y0, h0 = pose0
+    if model == "skid":
+        return _skid(wheels, robot, mode, pose0, adaptive=adaptive, dt_s=dt_s)
+    params = dict(mode.model_params.get(model, {}))
+    if model == "kinematic":
+        x, y, h = kinematic(wheels, robot, heading0_rad=h0, **params)
+    elif model == "lagrangian":
+        x, y, h = lagrangian(wheels, robot, heading0_rad=h0, **params)
+    else:
+        raise ValueError(f"unknown model {model!r}; expected one of {MODELS}")
+    return Trajectory(wheels.t_s, x + x0, y + y0, h)
+
+
+def _skid(
+    wheels: WheelInput,
+    robot: RobotParams,
+    mode: TerrainMode,
+    pose0: tuple[float, float, float],
+    *,
+    adaptive: bool,
+    dt_s: float,
+) -> Trajectory:
+    sim = SkidModel(robot)
+    state0 = np.zeros((1, 6))
+    state0[0, :3] = pose0
+    coeffs = coeffs_for(mode)
+    if adaptive:
+        n_out = max(2, int(np.ceil(wheels.duration_s / 0.01)) + 1)
+        t = np.linspace(0.0, wheels.duration_s, n_out)
+        states = sim.simulate_adaptive(state0, wheels.smooth_speed_at, coeffs, t, rtol=1e-5, atol=1e-7)
+    else:
+        t, states = sim.simulate_fixed(
+            state0, lambda a, b: wheels.mean_speeds(a, b)[None], coeffs, wheels.duration_s, dt_s
+        )
+    return Trajectory(t, states[:, 0, 0], states[:, 0, 1], states[:, 0, 2])

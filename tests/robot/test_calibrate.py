@@ -1,0 +1,91 @@
+"""Calibration: recovers coefficients it generated, and a fit on one pattern transfers to another."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+
+from swarm.robot.calibrate import calibrate, write_calibration
+from swarm.robot.io import Truth
+from swarm.robot.params import load_robot
+from swarm.robot.predict import predict
+from swarm.robot.runs import Run, load_encoder_run
+from swarm.robot.terrain import library_from_dict, load_library
+from swarm.robot.wheels import WheelInput
+
+ROOT = Path(__file__).resolve().parents[2]
+DATA = ROOT / "swarm" / "data" / "robot-runs"
+ROBOT = load_robot(ROOT / "swarm" / "data" / "robots" / "skid4.yaml")
+LIB = load_library()
+
+
+def synthetic_run(mode, seconds: float = 12.0) -> Run:
+    """A drive with a car turn and a pivot, its 'truth' from the adaptive skid model itself."""
+    t = np.arange(0.0, seconds + 1e-9, 0.01)
+    base = 5.0 * np.clip(t, 0, 1)
+    turn = 4.0 * np.sin(np.pi * np.clip((t - 3.0) / 3.0, 0, 1)) ** 2
+    pivot = 4.0 * np.sin(np.pi * np.clip((t - 7.0) / 3.0, 0, 1)) ** 2
+    left = np.where(t < 7, base - turn, -pivot)
+    right = np.where(t < 7, base + turn, pivot)
+    stop = np.clip((t - 6.0) / 1.0, 0, 1)
+    left, right = np.where(t < 7, left * (1 - stop), left), np.where(t < 7, right * (1 - stop), right)
+    wheels = WheelInput.from_speeds(t, left, right)
+    traj = predict("skid", wheels, ROBOT, mode, (0.0, 0.0, 0.5))
+    truth = Truth(traj.t_s, traj.x_m, traj.y_m, traj.heading_rad, "synthetic")
+    return Run("synthetic", wheels, truth)
+
+
+def test_skid_calibration_recovers_the_coefficients_that_made_the_data() -> None:
+    """Without the prior toward the defaults, the fit finds what generated the data (up to the
+    fixed-step integrator's difference from the adaptive one that made it)."""
+    true = replace(LIB["concrete"], mu_lateral=0.25, turning_resistance_m=0.08, shear_slip=0.05)
+    run = synthetic_run(true)
+    result = calibrate(
+        [run],
+        ROBOT,
+        LIB["concrete"],
+        "skid",
+        free=["mu_lateral", "turning_resistance_m"],
+        dt_s=0.002,
+        max_evaluations=30,
+        prior_m=0.0,
+    )
+    assert result.parameters["mu_lateral"] == pytest.approx(0.25, rel=0.05)
+    assert result.parameters["turning_resistance_m"] == pytest.approx(0.08, rel=0.1)
+    assert result.after[0].path_rmse_m < 0.1 * result.before[0].path_rmse_m
+
+
+def test_kinematic_icr_fit_finds_the_four_wheel_skid() -> None:
+    """A four-wheel skid-steer turns less than its track says (chi > 1, as Mandow et al. found)."""
+    square = load_encoder_run(
+        ROBOT, DATA / "concrete_square_encoders.txt", DATA / "concrete_square_truth.txt"
+    )
+    result = calibrate([square], ROBOT, LIB["concrete"], "kinematic")
+    assert result.parameters["chi"] > 1.3
+    assert result.after[0].path_rmse_m < 0.5 * result.before[0].path_rmse_m
+
+
+def test_written_calibration_reads_back_as_the_same_mode(tmp_path: Path) -> None:
+    run = synthetic_run(LIB["wet_hard_sand"], seconds=6.0)
+    result = calibrate(
+        [run], ROBOT, LIB["wet_hard_sand"], "skid", free=["mu_lateral"], max_evaluations=5, name="beach_a"
+    )
+    out = tmp_path / "fit.yaml"
+    write_calibration(out, result, ROBOT, [run])
+    doc = yaml.safe_load(out.read_text())
+    assert doc["fitted"]["runs"] == ["synthetic"]
+    mode = library_from_dict(doc, out, LIB)["beach_a"]
+    assert mode.mu_lateral == pytest.approx(result.mode.mu_lateral, abs=1e-6)
+    assert mode.mu_peak == LIB["wet_hard_sand"].mu_peak
+    assert load_library(out)["beach_a"].shear_slip == pytest.approx(result.mode.shear_slip, abs=1e-6)
+    assert list(tmp_path.iterdir()) == [out]
+
+
+def test_unknown_free_parameter_is_refused() -> None:
+    run = synthetic_run(LIB["concrete"], seconds=2.0)
+    with pytest.raises(ValueError, match="cannot fit"):
+        calibrate([run], ROBOT, LIB["concrete"], "kinematic", free=["mu_peak"])

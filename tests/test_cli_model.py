@@ -1,0 +1,312 @@
+"""`swarm model validate|calibrate` end to end, in a subprocess, on the bundled sample runs."""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import shutil
+import subprocess
+import sys
+from collections.abc import Callable
+from importlib.metadata import version
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+
+ROOT = Path(__file__).resolve().parents[1]
+RUNS = ROOT / "swarm" / "data" / "robot-runs"
+ROBOT = ROOT / "swarm" / "data" / "robots" / "skid4.yaml"
+SCORE_KEYS = ("model", "distance_m", "final_error_m", "path_rmse_m", "heading_rmse_deg")
+MODELS = {"skid", "kinematic", "lagrangian"}
+
+
+def swarm(
+    *args: object, cwd: Path | None = None, exe: list[str] | None = None
+) -> subprocess.CompletedProcess:
+    env = os.environ | {"MPLBACKEND": "Agg"}
+    command = (exe or [sys.executable, "-m", "swarm.cli"]) + [str(a) for a in args]
+    return subprocess.run(command, capture_output=True, text=True, timeout=120, cwd=cwd, env=env)
+
+
+def encoders(run: str) -> Path:
+    return RUNS / f"{run}_encoders.txt"
+
+
+def truth(run: str) -> Path:
+    return RUNS / f"{run}_truth.txt"
+
+
+def run_args(run: str) -> list[object]:
+    return ["--robot", ROBOT, "--encoders", encoders(run), "--truth", truth(run)]
+
+
+def validate_json(*args: object) -> dict:
+    result = swarm("model", "validate", *args, "--json")
+    assert result.returncode == 0, result.stderr
+    out = json.loads(result.stdout)  # the whole of stdout is one JSON object
+    assert isinstance(out, dict)
+    return out
+
+
+def path_length(x: np.ndarray, y: np.ndarray) -> float:
+    return float(np.sum(np.sqrt(np.diff(x) ** 2 + np.diff(y) ** 2)))
+
+
+def check_score(score: dict, model: str) -> None:
+    assert score["model"] == model
+    for key in SCORE_KEYS[1:]:
+        assert isinstance(score[key], float | int), key
+        assert math.isfinite(score[key]), key
+        assert score[key] >= 0, key
+
+
+# --- validate --------------------------------------------------------------------------------
+
+
+def test_validate_json_kinematic_on_straight_run():
+    out = validate_json(*run_args("concrete_straight"), "--model", "kinematic")
+    assert set(SCORE_KEYS) <= set(out)
+    check_score(out, "kinematic")
+    assert "compare" not in out
+    ref = np.loadtxt(truth("concrete_straight"))
+    assert out["distance_m"] == pytest.approx(path_length(ref[:, 1], ref[:, 2]), abs=1e-5)
+    # A straight 2.5 m run on concrete: dead reckoning from the encoders stays within 10 cm.
+    assert out["final_error_m"] < 0.1
+    assert out["path_rmse_m"] < 0.1
+    # RMSE over the run cannot exceed the largest error seen.
+    assert out["path_rmse_m"] <= out["max_error_m"] + 1e-9
+
+
+def test_validate_from_ssv_export():
+    ssv = RUNS / "concrete_straight.ssv"
+    out = validate_json("--robot", ROBOT, "--ssv", ssv, "--model", "kinematic")
+    check_score(out, "kinematic")
+    cols = np.loadtxt(ssv)  # t left right heading X Y
+    assert out["distance_m"] == pytest.approx(path_length(cols[:, 4], cols[:, 5]), abs=1e-5)
+    assert out["final_error_m"] < 0.1
+    assert out["duration_s"] == pytest.approx(cols[-1, 0] - cols[0, 0], abs=0.05)
+
+
+def test_validate_compare_scores_the_other_two_models():
+    out = validate_json(*run_args("concrete_straight"), "--compare")  # default model: skid
+    check_score(out, "skid")
+    compare = out["compare"]
+    assert isinstance(compare, list)
+    assert len(compare) == 2
+    assert {c["model"] for c in compare} == MODELS - {"skid"}
+    for c in compare:
+        check_score(c, c["model"])
+        assert c["distance_m"] == out["distance_m"]  # same run, same reference
+        assert c["final_error_m"] < 0.1  # every model should manage a straight line on concrete
+    assert out["final_error_m"] < 0.1
+
+
+def test_validate_plot_writes_png_and_no_temp_files(tmp_path):
+    import matplotlib.image as mpimg
+
+    fig = tmp_path / "FIG.png"
+    result = swarm(
+        "model", "validate", *run_args("concrete_straight"), "--model", "lagrangian", "--plot", fig
+    )
+    assert result.returncode == 0, result.stderr
+    assert str(fig) in result.stdout
+    assert "lagrangian" in result.stdout
+    assert fig.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    image = mpimg.imread(fig)
+    assert image.ndim == 3
+    assert image.shape[0] > 200
+    assert image.shape[1] > 400
+    assert image.shape[1] > image.shape[0]  # the overlay is landscape: path left, time series right
+    assert np.ptp(image[..., :3]) > 0  # something was drawn
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["FIG.png"]
+
+
+def test_validate_table_output():
+    result = swarm("model", "validate", *run_args("concrete_straight"), "--model", "kinematic")
+    assert result.returncode == 0, result.stderr
+    assert "terrain mode: concrete" in result.stdout
+    assert "concrete_straight" in result.stdout
+    assert "path RMSE" in result.stdout
+
+
+# --- bad input: one line on stderr, exit 2, no traceback ---------------------------------------
+
+
+def _missing_encoders(tmp_path: Path) -> tuple[list[object], list[str]]:
+    missing = tmp_path / "no_such_encoders.txt"
+    return ["--robot", ROBOT, "--encoders", missing, "--truth", truth("concrete_straight")], [str(missing)]
+
+
+def _malformed_encoder_line(tmp_path: Path) -> tuple[list[object], list[str]]:
+    lines = encoders("concrete_straight").read_text().splitlines()
+    lines[6] = lines[6].split()[0] + " 12 twelve"  # physical line 7
+    bad = tmp_path / "bad_encoders.txt"
+    bad.write_text("\n".join(lines) + "\n")
+    return ["--robot", ROBOT, "--encoders", bad, "--truth", truth("concrete_straight")], [
+        str(bad),
+        "line 7",
+    ]
+
+
+def _negative_mass(tmp_path: Path) -> tuple[list[object], list[str]]:
+    data = yaml.safe_load(ROBOT.read_text()) | {"mass_kg": -30.0}
+    robot = tmp_path / "robot.yaml"
+    robot.write_text(yaml.safe_dump(data))
+    args = [
+        "--robot",
+        robot,
+        "--encoders",
+        encoders("concrete_straight"),
+        "--truth",
+        truth("concrete_straight"),
+    ]
+    return args, [str(robot), "mass_kg"]
+
+
+def _encoders_without_truth(tmp_path: Path) -> tuple[list[object], list[str]]:
+    return ["--robot", ROBOT, "--encoders", encoders("concrete_straight")], ["--truth"]
+
+
+def _unknown_mode(tmp_path: Path) -> tuple[list[object], list[str]]:
+    return [*run_args("concrete_straight"), "--mode", "lava"], ["--mode", "lava"]
+
+
+def _bad_terrain_value(tmp_path: Path) -> tuple[list[object], list[str]]:
+    terrain = tmp_path / "terrain.yaml"
+    terrain.write_text("modes:\n  concrete:\n    mu_peak: 7.5\n")
+    return [*run_args("concrete_straight"), "--terrain", terrain], [str(terrain), "modes.concrete.mu_peak"]
+
+
+def _ssv_with_encoders(tmp_path: Path) -> tuple[list[object], list[str]]:
+    return [*run_args("concrete_straight"), "--ssv", RUNS / "concrete_straight.ssv"], ["--ssv"]
+
+
+def _mismatched_runs(tmp_path: Path) -> tuple[list[object], list[str]]:
+    args = [
+        "--robot",
+        ROBOT,
+        "--encoders",
+        encoders("concrete_straight"),
+        "--truth",
+        truth("concrete_square"),
+    ]
+    return args, [str(truth("concrete_square"))]
+
+
+@pytest.mark.parametrize(
+    "case",
+    [
+        _missing_encoders,
+        _malformed_encoder_line,
+        _negative_mass,
+        _encoders_without_truth,
+        _unknown_mode,
+        _bad_terrain_value,
+        _ssv_with_encoders,
+        _mismatched_runs,
+    ],
+    ids=lambda f: f.__name__.strip("_"),
+)
+def test_bad_input_is_one_line_and_exit_2(tmp_path, case: Callable):
+    args, named = case(tmp_path)
+    before = sorted(tmp_path.iterdir())
+    result = swarm("model", "validate", *args, "--json", "--plot", tmp_path / "fig.png")
+    assert result.returncode == 2, (result.stdout, result.stderr)
+    assert "Traceback" not in result.stderr + result.stdout
+    lines = result.stderr.splitlines()
+    assert len(lines) == 1, result.stderr
+    assert lines[0].startswith("swarm: error:")
+    for text in named:
+        assert text in lines[0], (text, lines[0])
+    assert result.stdout == ""
+    assert sorted(tmp_path.iterdir()) == before  # no figure, nothing half-written
+
+
+def test_argparse_errors_exit_2_without_traceback():
+    result = swarm("model", "validate", "--encoders", encoders("concrete_straight"))  # no --robot
+    assert result.returncode == 2
+    assert "--robot" in result.stderr
+    assert "Traceback" not in result.stderr
+    result = swarm("model", "validate", *run_args("concrete_straight"), "--model", "bicycle")
+    assert result.returncode == 2
+    assert "--model" in result.stderr
+    assert "Traceback" not in result.stderr
+
+
+# --- calibrate -> validate round trip -----------------------------------------------------------
+
+
+def test_calibrate_then_validate_round_trip(tmp_path):
+    from swarm.robot.terrain import load_library
+
+    out = tmp_path / "c.yaml"
+    result = swarm("model", "calibrate", "--model", "kinematic", *run_args("concrete_square"), "--out", out)
+    assert result.returncode == 0, result.stderr
+    assert "Traceback" not in result.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["c.yaml"]  # no temp file left behind
+
+    doc = yaml.safe_load(out.read_text())
+    (name,) = doc["modes"]
+    assert name == "concrete"
+    fitted = doc["modes"][name]["kinematic"]
+    assert set(fitted) == {"alpha", "chi"}
+    assert all(isinstance(v, float) and math.isfinite(v) and v > 0 for v in fitted.values())
+    # Skid steering turns less than the two-wheel geometry says: the effective track is wider.
+    assert fitted["chi"] > 1.0
+
+    library = load_library(out)
+    assert {k: pytest.approx(v) for k, v in library[name].model_params["kinematic"].items()} == fitted
+    assert "soft_sand" in list(library)  # the defaults are still there beside the fitted mode
+
+    plain = validate_json(*run_args("concrete_square"), "--model", "kinematic")
+    tuned = validate_json(*run_args("concrete_square"), "--model", "kinematic", "--terrain", out)
+    assert tuned["distance_m"] == plain["distance_m"]
+    assert tuned["path_rmse_m"] < plain["path_rmse_m"]
+    assert tuned["heading_rmse_deg"] < plain["heading_rmse_deg"]
+
+
+def test_calibrate_rejects_unknown_free_parameter_and_writes_nothing(tmp_path):
+    out = tmp_path / "c.yaml"
+    result = swarm(
+        "model",
+        "calibrate",
+        "--model",
+        "kinematic",
+        *run_args("concrete_straight"),
+        "--free",
+        "alpha,beta",
+        "--out",
+        out,
+    )
+    assert result.returncode == 2
+    lines = result.stderr.splitlines()
+    assert len(lines) == 1
+    assert lines[0].startswith("swarm: error:")
+    assert "--free" in lines[0]
+    assert "beta" in lines[0]
+    assert not any(tmp_path.iterdir())
+
+
+# --- version and help ----------------------------------------------------------------------------
+
+
+def test_console_script_version():
+    script = shutil.which("swarm") or str(Path(sys.executable).with_name("swarm"))
+    assert Path(script).exists()
+    result = swarm("--version", exe=[script])
+    assert result.returncode == 0
+    assert version("surf-swarm") in result.stdout
+    assert result.stdout.startswith("surf-swarm ")
+
+
+def test_module_version_and_help():
+    result = swarm("--version")
+    assert result.returncode == 0
+    assert result.stdout.strip() == f"surf-swarm {version('surf-swarm')}"
+    result = swarm("model", "validate", "--help")
+    assert result.returncode == 0
+    for option in ("--robot", "--encoders", "--truth", "--ssv", "--model", "--compare", "--json", "--plot"):
+        assert option in result.stdout
