@@ -4,15 +4,19 @@ State per robot `(x, y, heading, u, v, r)` (world pose; body-frame velocities an
 the left and right wheel angular velocities (velocity-controlled motors, as the encoders measure).
 
 Each of the four wheel contacts (two per side, at +-wheelbase/2 and +-track/2) slips relative to
-the ground. Its slip velocity is the contact-point velocity minus the wheel's surface speed; the
-combined slip is that vector over the contact's rolling speed (the longitudinal slip ratio, and the
-tangent of the slip angle sideways). Traction follows Janosi-Hanamoto, F = mu N (1 - exp(-s / k)),
-along the slip direction with `mu_peak` forward and `mu_lateral` sideways (a friction ellipse).
-Rolling resistance c_rr N opposes each contact's rolling. The lateral friction at the front and
-rear contacts is what resists turning: its moment about the centre of mass is the skid-steer
-turning-resistance moment (`turning_resistance_moment`), mu W l / 2 at full sliding for point
-contacts. Water carries part of the weight (`buoyancy_fraction`) and drags the hull quadratically.
-An external body-frame wrench (Fx, Fy, Mz) per robot brings in slopes, jet thrust, currents, waves.
+the ground. Its slip velocity is the contact-point velocity minus the wheel's surface speed, plus a
+third component rho * r for the patch spinning with the body (rho = turning_resistance_m /
+mu_lateral, an effective patch radius); the combined slip is that vector over the contact's
+rolling speed (the longitudinal slip ratio, the tangent of the slip angle, and the turn slip).
+Friction follows Janosi-Hanamoto, mu N (1 - exp(-s / k)), shared along the slip direction as a
+friction ellipsoid: `mu_peak` forward, `mu_lateral` sideways, and a spin (bore) moment of up to
+turning_resistance_m * N per patch, so a patch that slides sideways has less left to resist
+spinning, as in tyre turn-slip models and MuJoCo's elliptic friction cones. Rolling resistance
+c_rr N opposes each contact's rolling. The lateral forces at the front and rear contacts and the
+patches' spin friction together resist turning (`turning_resistance_moment` gives the former:
+mu W l / 2 at full sliding for point contacts). Water carries part of the weight
+(`buoyancy_fraction`) and drags the hull quadratically. An external body-frame wrench
+(Fx, Fy, Mz) and a normal-load scale per robot bring in slopes, jet thrust, currents and waves.
 
 Two integrators: `step` advances n robots by one fixed step with a linearly implicit scheme
 (contact and drag forces frozen at their secant slope, then the 3x3 velocity system solved in
@@ -55,7 +59,7 @@ class _Ground(NamedTuple):
     mu_lateral: np.ndarray
     shear_slip: np.ndarray
     roll_n: np.ndarray  # rolling-resistance force per contact, c_rr N
-    spin_nm: np.ndarray  # total spin-friction moment of the four patches, 4 N turning_resistance_m
+    spin_m: np.ndarray  # patch spin radius: turning_resistance_m / mu_lateral
     drag: np.ndarray  # 0.5 rho Cd A
 
 
@@ -75,6 +79,7 @@ class _Contacts(NamedTuple):
     kx_side: np.ndarray  # sum over the side's two contacts of the slip slope along x
     ky_axle: np.ndarray  # sum over the axle's two contacts of the slip slope along y
     k_roll: np.ndarray  # per contact on each side
+    k_spin: np.ndarray  # (n,) yaw-moment slope of the four patches' spin friction
 
 
 def _flat(c: Coeffs, name: str) -> np.ndarray:
@@ -119,7 +124,7 @@ class SkidModel:
             mu_lateral=_flat(c, "mu_lateral"),
             shear_slip=_flat(c, "shear_slip"),
             roll_n=_flat(c, "rolling_resistance") * load,
-            spin_nm=4.0 * load * _flat(c, "turning_resistance_m"),
+            spin_m=_flat(c, "turning_resistance_m") / np.maximum(_flat(c, "mu_lateral"), 1e-9),
             drag=_flat(c, "drag_n_s2_per_m2"),
         )
 
@@ -132,35 +137,37 @@ class SkidModel:
         sx = vx - w
         rolling = np.maximum(np.abs(w), np.abs(vx))
         rolling += reg
-        # combined slip of each contact (side, axle, n): slip velocity over rolling speed
-        slip = np.sqrt((sx * sx)[:, None, :] + (vy * vy)[None, :, :])
+        # combined slip of each contact (side, axle, n): the slip velocity, with the patch's spin
+        # r * rho as a third component sharing the same friction budget, over the rolling speed
+        spin = g.spin_m * r
+        slip = np.sqrt((sx * sx + spin * spin)[:, None, :] + (vy * vy)[None, :, :])
         slip /= rolling[:, None, :]
         np.maximum(slip, 1e-12, out=slip)
         # Janosi-Hanamoto traction over slip, (1 - exp(-s/k)) / s, times the load over rolling speed
         secant = np.expm1(slip / -g.shear_slip)
         secant /= slip
         secant *= -g.load_n / rolling[:, None, :]
+        axle_sum = secant[0] + secant[1]
         return _Contacts(
             vx=vx,
             w=w,
             vy=vy,
             secant=secant,
             kx_side=g.mu_peak * (secant[:, 0] + secant[:, 1]),
-            ky_axle=g.mu_lateral * (secant[0] + secant[1]),
+            ky_axle=g.mu_lateral * axle_sum,
             k_roll=g.roll_n / np.sqrt(vx * vx + reg * reg),
+            k_spin=g.mu_lateral * g.spin_m * g.spin_m * (axle_sum[0] + axle_sum[1]),
         )
 
     def _damping(self, state: np.ndarray, g: _Ground) -> tuple[np.ndarray, np.ndarray]:
         """Secant slopes of the body-level resistances: translation (n,) and yaw (n,).
 
-        Translation: quadratic hull drag in water. Yaw: hull drag (strip theory over the hull
-        length L gives c L^3/32 |r| r) plus the four contact patches' spin (bore) friction,
-        N * turning_resistance_m each, against the yaw rate.
+        Quadratic hull drag in water; for yaw, strip theory over the hull length L gives
+        c L^3/32 |r| r.
         """
         u, v, r = state[:, U], state[:, V], state[:, R]
-        spin_reg = self.regularization_mps / self.half_track_m
         lin = g.drag * np.sqrt(u * u + v * v)
-        yaw = g.drag * (self.robot.length_m**3 / 32.0) * np.abs(r) + g.spin_nm / np.sqrt(r * r + spin_reg**2)
+        yaw = g.drag * (self.robot.length_m**3 / 32.0) * np.abs(r)
         return lin, yaw
 
     def contact_forces(
@@ -199,7 +206,7 @@ class SkidModel:
         fy_axle = -k.ky_axle * k.vy  # (2, n) front, rear
         force_x = fx_side[0] + fx_side[1] - lin * u
         force_y = fy_axle[0] + fy_axle[1] - lin * v
-        moment = b * (fy_axle[0] - fy_axle[1]) - a * (fx_side[0] - fx_side[1]) - yaw * r
+        moment = b * (fy_axle[0] - fy_axle[1]) - a * (fx_side[0] - fx_side[1]) - (yaw + k.k_spin) * r
         if wrench is not None:
             ext = np.broadcast_to(wrench, (state.shape[0], 3))
             force_x, force_y, moment = force_x + ext[:, 0], force_y + ext[:, 1], moment + ext[:, 2]
@@ -245,7 +252,7 @@ class SkidModel:
         a22 = m / dt_s + ky_sum + lin
         a13 = -a * (kx[0] - kx[1])
         a23 = b * (k.ky_axle[0] - k.ky_axle[1])
-        a33 = inertia / dt_s + b * b * ky_sum + a * a * kx_sum + yaw
+        a33 = inertia / dt_s + b * b * ky_sum + a * a * kx_sum + yaw + k.k_spin
         b1 = m * (u / dt_s + v * r) + drive[0] + drive[1]
         b2 = m * (v / dt_s - u * r)
         b3 = inertia / dt_s * r - a * (drive[0] - drive[1])

@@ -26,7 +26,7 @@ COEFFICIENTS: dict[str, str] = {
     "mu_lateral": "lateral (sideways sliding) friction coefficient, >= 0",
     "shear_slip": "Janosi-Hanamoto slip where traction reaches 1 - 1/e of its peak (K / contact length), > 0",
     "rolling_resistance": "rolling-resistance coefficient (force / normal load), >= 0",
-    "turning_resistance_m": "spin (bore) friction of a contact patch: yaw moment / normal load, metres, >= 0",
+    "turning_resistance_m": "spin (bore) friction of a patch at pure spin: yaw moment / normal load, m, >= 0",
     "rolling_radius_scale": "effective rolling radius / nominal wheel radius (sinkage), in (0, 1.5]",
     "buoyancy_fraction": "fraction of the robot's weight carried by water, in [0, 1]",
     "drag_n_s2_per_m2": "quadratic hydrodynamic drag 0.5 rho Cd A on the hull, N s^2/m^2, >= 0",
@@ -58,6 +58,8 @@ class TerrainMode:
     buoyancy_fraction: float = 0.0
     drag_n_s2_per_m2: float = 0.0
     description: str = ""
+    #: False for ground no robot can cross (boulders, driftwood logs): planners treat it as an obstacle.
+    passable: bool = True
     sources: Mapping[str, str] = field(default_factory=dict)
     #: Fitted parameters of the thesis models on this ground: {"kinematic": {"alpha": .., "chi": ..},
     #: "lagrangian": {"robot_inertia_scale": .., "wheel_inertia_scale": ..}}
@@ -143,6 +145,8 @@ def mode_to_dict(mode: TerrainMode) -> dict:
     out: dict[str, object] = {}
     if mode.description:
         out["description"] = mode.description
+    if not mode.passable:
+        out["passable"] = False
     out.update({k: round(v, 6) for k, v in mode.coefficients().items()})
     for model, params in mode.model_params.items():
         out[model] = {k: round(float(v), 6) for k, v in params.items()}
@@ -177,7 +181,8 @@ def library_from_dict(data: object, source: str | Path, base: TerrainLibrary | N
     """Build modes from `{"modes": {name: {...}}}`.
 
     A name already in `base` overrides only the keys it gives; a new name takes every coefficient
-    from the mode named by its `like:` key, or must give all of them.
+    from the mode named by its `like:` key (in `base` or earlier in the same file), or must give
+    all of them.
     """
     if not isinstance(data, dict) or not isinstance(data.get("modes"), dict):
         raise InputError(
@@ -189,7 +194,7 @@ def library_from_dict(data: object, source: str | Path, base: TerrainLibrary | N
     extra = set(data) - {"modes", "fitted"}
     if extra:
         raise InputError(source, sorted(extra)[0], sorted(extra)[0], "only the keys 'modes' (and 'fitted')")
-    allowed = {*COEFFICIENTS, *MODEL_PARAMS, "description", "sources", "like"}
+    allowed = {*COEFFICIENTS, *MODEL_PARAMS, "description", "passable", "sources", "like"}
     modes: list[TerrainMode] = []
     for name, spec in data["modes"].items():
         where = f"modes.{name}"
@@ -200,10 +205,13 @@ def library_from_dict(data: object, source: str | Path, base: TerrainLibrary | N
                 raise InputError(source, f"{where}.{key}", key, f"one of {sorted(allowed)}")
         parent: TerrainMode | None = None
         if "like" in spec:
-            if base is None or spec["like"] not in base:
-                known = sorted(base) if base is not None else []
-                raise InputError(source, f"{where}.like", spec["like"], f"a known terrain mode {known}")
-            parent = base[spec["like"]]
+            # a mode defined earlier in this file, else one of the base library
+            known = {**(dict(base) if base is not None else {}), **{m.name: m for m in modes}}
+            if spec["like"] not in known:
+                raise InputError(
+                    source, f"{where}.like", spec["like"], f"a known terrain mode {sorted(known)}"
+                )
+            parent = known[spec["like"]]
         elif base is not None and name in base:
             parent = base[name]
         values: dict[str, object] = {}
@@ -231,6 +239,9 @@ def library_from_dict(data: object, source: str | Path, base: TerrainLibrary | N
                 )
             sources.update({str(k): str(v) for k, v in spec["sources"].items()})
         description = str(spec.get("description", parent.description if parent else ""))
+        passable = spec.get("passable", parent.passable if parent else True)
+        if not isinstance(passable, bool):
+            raise InputError(source, f"{where}.passable", passable, "true or false")
         model_params = {k: dict(v) for k, v in (parent.model_params.items() if parent else [])}
         for model, keys in MODEL_PARAMS.items():
             if model not in spec:
@@ -243,7 +254,12 @@ def library_from_dict(data: object, source: str | Path, base: TerrainLibrary | N
             }
         modes.append(
             TerrainMode(
-                name=str(name), description=description, sources=sources, model_params=model_params, **values
+                name=str(name),
+                description=description,
+                passable=passable,
+                sources=sources,
+                model_params=model_params,
+                **values,
             )
         )
     return TerrainLibrary(modes)
