@@ -72,7 +72,53 @@ def _parser() -> argparse.ArgumentParser:
     calibrate.add_argument("--json", action="store_true", help="print the result as JSON")
     calibrate.add_argument("--out", required=True, type=Path, help="terrain-mode YAML to write")
     calibrate.set_defaults(handler=_cmd_calibrate)
+    _add_map_commands(commands)
     return parser
+
+
+def _add_map_commands(commands) -> None:
+    """`swarm map info|show|generate|import-dem`: beach maps (swarm/world)."""
+    beach = commands.add_parser("map", help="beach maps: describe, draw, generate, import a DEM")
+    map_cmds = beach.add_subparsers(dest="map_command", required=True, metavar="ACTION")
+    terrain_help = "terrain-mode YAML adding modes the map's classes name (default: the bundled modes)"
+
+    info = map_cmds.add_parser("info", help="size, cell, terrain fractions, elevation, slope, regions")
+    info.add_argument("map", type=Path, metavar="MAP.yaml")
+    info.add_argument("--terrain", type=Path, help=terrain_help)
+    info.add_argument("--json", action="store_true", help="print one JSON object instead of tables")
+    info.set_defaults(handler=_cmd_map_info)
+
+    show = map_cmds.add_parser("show", help="draw the map: terrain, elevation contours, regions")
+    show.add_argument("map", type=Path, metavar="MAP.yaml")
+    show.add_argument("--terrain", type=Path, help=terrain_help)
+    show.add_argument("-o", "--out", required=True, type=Path, metavar="FIG.png", help="figure to write")
+    show.set_defaults(handler=_cmd_map_show)
+
+    generate = map_cmds.add_parser("generate", help="a procedural beach (swarm.world.generate)")
+    generate.add_argument("--seed", type=int, help="random seed (same seed, same beach)")
+    generate.add_argument("--length-m", type=float, help="alongshore length (m)")
+    generate.add_argument("--width-m", type=float, help="cross-shore width (m)")
+    generate.add_argument("--d50-mm", type=float, help="median sand grain size (mm)")
+    generate.add_argument("--breaker-height-m", type=float, help="breaking wave height (m)")
+    generate.add_argument("--cell-m", type=float, help="grid cell size (m)")
+    generate.add_argument("--name", help="map name (default: the output file's stem)")
+    generate.add_argument(
+        "-o", "--out", required=True, type=Path, metavar="maps/NAME.yaml", help="map YAML to write (+ .npz)"
+    )
+    generate.set_defaults(handler=_cmd_map_generate)
+
+    dem = map_cmds.add_parser(
+        "import-dem", help="a map from an ESRI ASCII DEM (.asc), terrain classified by elevation"
+    )
+    dem.add_argument(
+        "dem", type=Path, metavar="DEM.asc", help="elevation grid, metres, projected x east y north"
+    )
+    dem.add_argument("--name", help="map name (default: the output file's stem)")
+    dem.add_argument("--fill", type=float, metavar="M", help="elevation (m) for NODATA cells")
+    dem.add_argument(
+        "-o", "--out", required=True, type=Path, metavar="maps/NAME.yaml", help="map YAML to write (+ .npz)"
+    )
+    dem.set_defaults(handler=_cmd_map_import_dem)
 
 
 def _check_output(path: Path | None, option: str, suffixes: tuple[str, ...]) -> None:
@@ -253,6 +299,126 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
     rows += [[f"{r[0]} (fitted)", *r[1:]] for r in after[1:]]
     print(_table(rows))
     print(f"wrote terrain mode '{result.mode.name}' to {args.out}")
+    return 0
+
+
+MAP_SUFFIXES = (".yaml", ".yml")
+
+
+def _load_map_arg(args: argparse.Namespace):
+    from swarm.robot.terrain import load_library
+    from swarm.world.io import load_map
+
+    library = load_library(args.terrain)
+    return load_map(args.map, library), library
+
+
+def _fraction(value: float) -> str:
+    return "<0.1%" if 0 < value < 0.0005 else f"{value:.1%}"
+
+
+def _cmd_map_info(args: argparse.Namespace) -> int:
+    beach_map, library = _load_map_arg(args)
+    info = {"file": str(args.map), **beach_map.summary(library)}
+    if args.json:
+        print(json.dumps(info, indent=2))
+        return 0
+    print(f"map {info['name']} ({args.map})")
+    print(
+        f"size       {info['cols']} x {info['rows']} cells (cols x rows) = "
+        f"{info['width_m']:g} m east-west x {info['height_m']:g} m north-south"
+    )
+    x0, y0, x1, y1 = info["bounds_m"]
+    print(
+        f"cell       {info['cell_m']:g} m; origin ({x0:g}, {y0:g}) m; x {x0:g}..{x1:g} m, y {y0:g}..{y1:g} m"
+    )
+    print(
+        f"elevation  {info['elevation_min_m']:.2f} .. {info['elevation_max_m']:.2f} m; "
+        f"max slope {info['max_slope_deg']:.1f} deg; impassable {_fraction(info['impassable_fraction'])}"
+    )
+    print()
+    rows = [["terrain class", "cells", "fraction"]]
+    rows += [
+        [c, str(info["terrain_cells"][c]), _fraction(info["terrain_fractions"][c])]
+        for c in info["terrain_classes"]
+    ]
+    print(_table(rows))
+    if info["regions"]:
+        print()
+        rows = [["region", "kind", "geometry", "area m2", "length m", "position m"]]
+        rows += [
+            [
+                r["name"],
+                r["kind"],
+                r["geometry"],
+                f"{r['area_m2']:.1f}",
+                f"{r['length_m']:.1f}",
+                f"({r['position_m'][0]:.1f}, {r['position_m'][1]:.1f})",
+            ]
+            for r in info["regions"]
+        ]
+        print(_table(rows))
+    else:
+        print("no regions")
+    return 0
+
+
+def _cmd_map_show(args: argparse.Namespace) -> int:
+    _check_output(args.out, "--out", FIGURE_SUFFIXES)
+    beach_map, _ = _load_map_arg(args)
+    from swarm.report.map_figure import plot_map
+
+    plot_map(beach_map, args.out)
+    print(f"figure: {args.out}")
+    return 0
+
+
+def _map_name(args: argparse.Namespace) -> str:
+    name = args.name if args.name is not None else args.out.stem
+    if not name.strip():
+        raise InputError("command line", "--name", name, "a non-empty map name")
+    return name
+
+
+def _cmd_map_generate(args: argparse.Namespace) -> int:
+    _check_output(args.out, "--out", MAP_SUFFIXES)
+    given = {
+        "length_m": args.length_m,
+        "width_m": args.width_m,
+        "d50_mm": args.d50_mm,
+        "breaker_height_m": args.breaker_height_m,
+        "cell_m": args.cell_m,
+    }
+    for key, value in given.items():
+        if value is not None and not (value > 0 and value < float("inf")):
+            raise InputError("command line", "--" + key.replace("_", "-"), value, "a positive number")
+    if args.seed is not None and args.seed < 0:
+        raise InputError("command line", "--seed", args.seed, "a non-negative integer")
+    from swarm.world.generate import generate_beach
+    from swarm.world.io import save_map
+
+    options = {k: v for k, v in {"seed": args.seed, **given}.items() if v is not None}
+    beach_map = generate_beach(name=_map_name(args), **options)
+    save_map(beach_map, args.out)
+    rows, cols = beach_map.shape
+    print(
+        f"wrote {args.out} and {args.out.with_suffix('.npz')}: {beach_map.name}, "
+        f"{beach_map.width_m:g} m x {beach_map.height_m:g} m, {cols} x {rows} cells of {beach_map.cell_m:g} m"
+    )
+    return 0
+
+
+def _cmd_map_import_dem(args: argparse.Namespace) -> int:
+    from swarm.world.io import map_from_dem, save_map
+
+    _check_output(args.out, "--out", MAP_SUFFIXES)
+    beach_map = map_from_dem(args.dem, _map_name(args), fill=args.fill)
+    save_map(beach_map, args.out)
+    rows, cols = beach_map.shape
+    print(
+        f"wrote {args.out} and {args.out.with_suffix('.npz')}: {beach_map.name}, "
+        f"{cols} x {rows} cells of {beach_map.cell_m:g} m from {args.dem}"
+    )
     return 0
 
 
