@@ -73,6 +73,9 @@ def _parser() -> argparse.ArgumentParser:
     calibrate.add_argument("--out", required=True, type=Path, help="terrain-mode YAML to write")
     calibrate.set_defaults(handler=_cmd_calibrate)
     _add_map_commands(commands)
+    _add_path_command(commands)
+    schema = commands.add_parser("schema", help="print the mission file JSON Schema (for editors)")
+    schema.set_defaults(handler=_cmd_schema)
     return parser
 
 
@@ -419,6 +422,174 @@ def _cmd_map_import_dem(args: argparse.Namespace) -> int:
         f"wrote {args.out} and {args.out.with_suffix('.npz')}: {beach_map.name}, "
         f"{cols} x {rows} cells of {beach_map.cell_m:g} m from {args.dem}"
     )
+    return 0
+
+
+# --- swarm path: OMPL path planning (swarm/planning) -------------------------------------------
+def _add_path_command(commands) -> None:
+    """`swarm path MAP --from X,Y --to X,Y`, or `--benchmark P1.yaml,P2.yaml -o bench.log`."""
+    path = commands.add_parser(
+        "path",
+        help="plan a path on a map with OMPL, or export OMPL's benchmark log for planner profiles",
+    )
+    path.add_argument("map", type=Path, metavar="MAP.yaml")
+    path.add_argument("--from", dest="start", metavar="X,Y", help="start, world metres")
+    path.add_argument("--to", dest="goal", metavar="X,Y", help="goal, world metres")
+    path.add_argument(
+        "--profile", type=Path, metavar="P.yaml", help="planner profile (default: the built-in 'fast')"
+    )
+    path.add_argument("--seed", type=int, default=0, help="random seed: same seed and profile, same path")
+    path.add_argument("--robot", type=Path, help="robot YAML (default: the bundled skid4)")
+    path.add_argument(
+        "--terrain", type=Path, help="terrain-mode YAML overriding or adding to the bundled modes"
+    )
+    path.add_argument("--json", action="store_true", help="print one JSON object")
+    bench = path.add_argument_group("benchmark export (OMPL's Benchmark tool)")
+    bench.add_argument(
+        "--benchmark", metavar="P1.yaml,P2.yaml", help="comma-separated profiles to benchmark on the map"
+    )
+    bench.add_argument("--runs", type=int, default=10, help="runs per profile (default 10)")
+    bench.add_argument(
+        "--time", type=float, metavar="S", help="seconds per run (default: the profiles' time_s, else 1)"
+    )
+    bench.add_argument(
+        "--objective", choices=("length", "terrain_cost"), help="the experiment's one objective"
+    )
+    bench.add_argument("-o", "--out", type=Path, metavar="bench.log", help="benchmark log to write")
+    path.set_defaults(handler=_cmd_path)
+
+
+def _xy_arg(option: str, value: str | None) -> tuple[float, float] | None:
+    import math
+
+    if value is None:
+        return None
+    parts = value.split(",")
+    try:
+        x, y = (float(p) for p in parts)
+    except ValueError:
+        raise InputError("command line", option, value, "X,Y in metres, e.g. 12.5,40") from None
+    if not (math.isfinite(x) and math.isfinite(y)):
+        raise InputError("command line", option, value, "finite X,Y in metres")
+    return x, y
+
+
+def _cmd_path(args: argparse.Namespace) -> int:
+    from importlib.resources import files
+
+    from swarm.planning.costmap import build_costmap
+    from swarm.planning.profiles import DEFAULT_PROFILE, load_profile
+    from swarm.robot.params import load_robot
+    from swarm.robot.terrain import load_library
+    from swarm.world.io import load_map
+
+    start, goal = _xy_arg("--from", args.start), _xy_arg("--to", args.goal)
+    if args.benchmark is None:
+        for option, value in (("--out", args.out), ("--time", args.time), ("--objective", args.objective)):
+            if value is not None:
+                raise InputError("command line", option, str(value), "--benchmark P1.yaml,P2.yaml with it")
+        if start is None or goal is None:
+            missing = "--from" if start is None else "--to"
+            raise InputError("command line", missing, "nothing", "--from X,Y --to X,Y (world metres)")
+    else:
+        if args.profile is not None:
+            raise InputError(
+                "command line", "--profile", str(args.profile), "the profiles in --benchmark only"
+            )
+        if args.out is None:
+            raise InputError(
+                "command line", "-o/--out", "nothing", "the benchmark log to write, e.g. -o bench.log"
+            )
+        _check_output(args.out, "--out", (".log",))
+        if (start is None) != (goal is None):
+            raise InputError(
+                "command line", "--from/--to", "one of them", "both, or neither (a default query)"
+            )
+        if args.runs < 1:
+            raise InputError("command line", "--runs", args.runs, "a positive number of runs")
+        if args.time is not None and not args.time > 0:
+            raise InputError("command line", "--time", args.time, "a positive number of seconds")
+        benchmark_profiles = [load_profile(p.strip()) for p in args.benchmark.split(",") if p.strip()]
+        if not benchmark_profiles:
+            raise InputError("command line", "--benchmark", args.benchmark, "P1.yaml,P2.yaml")
+
+    profile = load_profile(args.profile) if args.profile is not None else DEFAULT_PROFILE
+    library = load_library(args.terrain)
+    robot = load_robot(args.robot or Path(str(files("swarm") / "data" / "robots" / "skid4.yaml")))
+    beach_map = load_map(args.map, library)
+    cm = build_costmap(beach_map, robot, library)
+
+    if args.benchmark is not None:
+        return _path_benchmark(args, cm, benchmark_profiles, start, goal)
+
+    from swarm.planning.paths import plan_path
+
+    result = plan_path(cm, start, goal, profile, seed=args.seed)
+    if args.json:
+        out = {"map": str(args.map), "from": list(start), "to": list(goal), "seed": args.seed}
+        out.update(result.as_dict())
+        out["robot_half_width_m"] = cm.half_width_m
+        out["cost_reference"] = {"mode": cm.speeds.reference_mode, "speed_mps": cm.speeds.reference_speed_mps}
+        print(json.dumps(out))
+        return 0
+    print(
+        f"path: {result.length_m:.1f} m in {len(result.waypoints_m)} waypoints, cost {result.cost:.1f} "
+        f"(1.0 a metre on {cm.speeds.reference_mode}), about {result.time_s:.0f} s of driving"
+    )
+    print(
+        f"planner: profile '{result.profile}' ({result.planner}, objective {result.objective}, seed "
+        f"{args.seed}): solved in {result.solve_ms:.1f} ms, simplified in {result.simplify_ms:.1f} ms"
+    )
+    xy = result.waypoints_m
+    print(
+        f"from ({xy[0, 0]:.2f}, {xy[0, 1]:.2f}) to ({xy[-1, 0]:.2f}, {xy[-1, 1]:.2f}); "
+        "--json lists every waypoint"
+    )
+    return 0
+
+
+def _path_benchmark(args: argparse.Namespace, cm, profiles, start, goal) -> int:
+    from swarm.planning.benchmark import export_benchmark
+
+    export = export_benchmark(
+        cm,
+        profiles,
+        args.out,
+        start=start,
+        goal=goal,
+        runs=args.runs,
+        time_s=args.time,
+        objective=args.objective,
+        seed=args.seed,
+    )
+    if args.json:
+        print(json.dumps(export.as_dict()))
+        return 0
+    s, g = export.start, export.goal
+    print(
+        f"OMPL benchmark: ({s[0]:.2f}, {s[1]:.2f}) -> ({g[0]:.2f}, {g[1]:.2f}), "
+        f"objective {export.objective}, {export.runs} runs x {export.time_s:g} s per planner"
+    )
+    rows = [["planner", "solved", "mean time s", "mean length m", "mean best cost"]]
+    for p in export.planners:
+        rows.append(
+            [
+                p.name,
+                f"{p.solved}/{p.runs}",
+                f"{p.mean_time_s:.3f}",
+                "-" if p.mean_length_m is None else f"{p.mean_length_m:.1f}",
+                "-" if p.mean_cost is None else f"{p.mean_cost:.1f}",
+            ]
+        )
+    print(_table(rows))
+    print(f"wrote {export.path}: ompl_benchmark_statistics.py {export.path} -d bench.db (then Planner Arena)")
+    return 0
+
+
+def _cmd_schema(_args: argparse.Namespace) -> int:
+    from swarm.mission.schema import mission_json_schema
+
+    print(json.dumps(mission_json_schema(), indent=2))
     return 0
 
 

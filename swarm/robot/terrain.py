@@ -71,12 +71,15 @@ class TerrainMode:
 
     @property
     def max_climb_slope_deg(self) -> float:
-        """Steepest slope the wheels can climb at steady speed: tan(a) = mu_eff - c_rr.
+        """Steepest slope the wheels can climb at steady speed: tan(a) = mu_peak - c_rr.
 
-        On a slope a, traction needed per unit weight is sin(a) + c_rr cos(a), available is
-        mu_peak cos(a) (times what the water leaves of the weight); equality gives the limit.
+        On a slope a, with W' the weight the water leaves (W (1 - buoyancy)), the wheels need
+        W' sin(a) + c_rr W' cos(a) of traction and have mu_peak W' cos(a); W' cancels, so water
+        changes the limit only through the coefficients. No traction (deep water): 0.
         """
-        grip = self.mu_peak * (1.0 - self.buoyancy_fraction) - self.rolling_resistance
+        if self.buoyancy_fraction >= 1.0:
+            return 0.0
+        grip = self.mu_peak - self.rolling_resistance
         return math.degrees(math.atan(grip)) if grip > 0 else 0.0
 
     def coefficients(self) -> dict[str, float]:

@@ -212,15 +212,17 @@ def test_buoyancy_takes_weight_off_the_wheels() -> None:
     np.testing.assert_allclose(fx_wet, 0.25 * fx_dry, rtol=1e-12)
 
 
-def test_external_wrench_gravity_on_a_slope_beyond_grip_slides_down() -> None:
-    """Downhill gravity m g sin(a) as an external force and the wheels' load m g cos(a): below the
-    climb limit the robot holds position on still wheels, above it it slides."""
+@pytest.mark.parametrize("name", ["concrete", "shallow_water", "surf"])
+def test_external_wrench_gravity_on_a_slope_beyond_grip_slides_down(name: str) -> None:
+    """Downhill gravity (what the water leaves of it) as an external force and the wheels' load
+    times cos(a): below the terrain's climb limit the robot holds on still wheels, above it slides."""
     model = SkidModel(ROBOT)
-    mode = ground(rolling_resistance=0.0)
+    mode = replace(LIB[name], rolling_resistance=0.0)
     c = coeffs_for(mode)
     limit = math.radians(mode.max_climb_slope_deg)
+    weight = ROBOT.mass_kg * GRAVITY_MPS2 * (1 - mode.buoyancy_fraction)
     for slope, holds in ((0.6 * limit, True), (1.3 * limit, False)):
-        wrench = np.array([[-ROBOT.mass_kg * GRAVITY_MPS2 * math.sin(slope), 0.0, 0.0]])
+        wrench = np.array([[-weight * math.sin(slope), 0.0, 0.0]])
         state = np.zeros((1, 6))
         for _ in range(1000):
             state = model.step(state, np.zeros((1, 2)), c, 0.002, wrench, np.array([math.cos(slope)]))

@@ -260,12 +260,12 @@ def test_gather_accepts_a_2d_class_grid():
 # --- climbing ------------------------------------------------------------------------------------
 
 
-@pytest.mark.parametrize("name", ["concrete", "soft_sand", "shallow_water"])
+@pytest.mark.parametrize("name", ["concrete", "soft_sand", "shallow_water", "surf"])
 def test_max_climb_slope_from_traction_balance(name):
+    """Buoyancy lightens both the grip and the downslope pull, so it cancels: tan a = mu - c_rr."""
     raw = yaml.safe_load(MODES_YAML.read_text())["modes"][name]
     mu, crr = raw["mu_peak"], raw["rolling_resistance"]
-    buoyancy = raw.get("buoyancy_fraction", 0.0)
-    expected = math.degrees(math.atan(mu * (1 - buoyancy) - crr))
+    expected = math.degrees(math.atan(mu - crr))
     assert default_library()[name].max_climb_slope_deg == pytest.approx(expected, rel=1e-12)
 
 

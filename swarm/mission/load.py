@@ -1,0 +1,724 @@
+"""Loading a mission file: YAML, overrides, schema validation, then its references, with errors of
+one line each (`InputError`: file, key path, what was found, what was expected).
+
+```python
+mission = load_mission("missions/landing.yaml")
+mission = load_mission("missions/landing.yaml", {"swarm.count": 20, "hazards.surf.wave_height_m": 1.5})
+```
+
+1. The YAML is read (duplicate keys are errors; `2.4e9` is a number, as in YAML 1.2).
+2. Overrides replace values at dotted key paths (`swarm.count`, `tasks.0.sensor.sweep_width_m`)
+   before validation; a path must name a key of the schema (`apply_overrides`). The simulator and
+   the studies use the same paths.
+3. The schema (`swarm.mission.schema`) checks keys, types, units and ranges; the first problem is
+   reported, e.g. `missions/x.yaml: tasks[1].sensor.sweep_width_m: found -2, expected a number in
+   metres > 0`.
+4. References: the robot YAML, the terrain YAML, the map and the planner profile must exist
+   (relative to the mission file) and load; every region a mission names must exist in the map
+   with the right kind; points must lie in the map (in the water for a sea launch, on passable
+   ground for tasks); and the parts must agree (a clearance before beach operations end, enough
+   robots for each task, a release point the robots can swim from in time).
+
+The loaded `Mission` carries what it resolved: `mission.beach_map`, `mission.terrain_library`,
+`mission.robot_params`, `mission.planner_profile`, `mission.resolved("map_path")`.
+"""
+
+from __future__ import annotations
+
+import copy
+import os
+import re
+import types
+from collections.abc import Mapping, Sequence
+from importlib import resources
+from pathlib import Path
+from typing import Annotated, Any, Literal, Union, get_args, get_origin
+
+import yaml
+from pydantic import BaseModel, ValidationError
+
+from swarm.errors import InputError
+from swarm.mission.schema import (
+    TASK_CLASSES,
+    Mission,
+    SearchTask,
+)
+
+Parts = list[str | int]
+
+
+# --- YAML ---------------------------------------------------------------------------------------------
+
+
+class _DuplicateKey(Exception):
+    def __init__(self, key: object, line: int) -> None:
+        super().__init__(key)
+        self.key, self.line = key, line
+
+
+class _Loader(yaml.SafeLoader):
+    """Safe YAML with duplicate keys refused and YAML 1.2 exponent floats (`2.4e9`, `1e5`)."""
+
+    def construct_mapping(self, node, deep=False):  # type: ignore[override]
+        self.flatten_mapping(node)
+        seen: set[object] = set()
+        for key_node, _ in node.value:
+            key = self.construct_object(key_node, deep=deep)
+            try:
+                duplicate = key in seen
+            except TypeError:  # unhashable keys: let the base class complain
+                break
+            if duplicate:
+                raise _DuplicateKey(key, key_node.start_mark.line + 1)
+            seen.add(key)
+        return super().construct_mapping(node, deep=deep)
+
+
+_Loader.add_implicit_resolver(
+    "tag:yaml.org,2002:float",
+    re.compile(r"^[-+]?[0-9][0-9_]*(?:\.[0-9_]*)?[eE][-+]?[0-9]+$"),
+    list("-+0123456789"),
+)
+
+
+def read_mission_yaml(path: str | Path) -> dict:
+    """The mission file's YAML as a mapping (not yet validated)."""
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        found = exc.strerror if isinstance(exc, OSError) else "bytes that are not UTF-8 text"
+        raise InputError(path, "(file)", found, "a readable mission YAML file") from None
+    try:
+        data = yaml.load(text, Loader=_Loader)
+    except _DuplicateKey as exc:
+        raise InputError(path, f"line {exc.line}", exc.key, "each key once in a mapping") from None
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        where = f"line {mark.line + 1}" if mark else "(file)"
+        raise InputError(path, where, getattr(exc, "problem", None) or "invalid YAML", "YAML") from None
+    if not isinstance(data, dict):
+        found = "an empty file" if data is None else type(data).__name__
+        raise InputError(path, "(top level)", found, "a mapping of mission keys (map, swarm, tasks, ...)")
+    return data
+
+
+# --- walking the schema alongside the data --------------------------------------------------------------
+
+
+def _strip(ann: Any) -> Any:
+    """The type under Annotated[...] and Optional[...]."""
+    while True:
+        origin = get_origin(ann)
+        if origin is Annotated:
+            ann = get_args(ann)[0]
+            continue
+        if origin in (Union, types.UnionType):
+            args = [a for a in get_args(ann) if a is not type(None)]
+            if len(args) == 1:
+                ann = args[0]
+                continue
+        return ann
+
+
+def _kind(ann: Any) -> tuple[str, Any]:
+    """('model', cls) | ('list', item) | ('dict', value) | ('tagged', None) | ('leaf', type)."""
+    ann = _strip(ann)
+    if isinstance(ann, type) and issubclass(ann, BaseModel):
+        return "model", ann
+    origin = get_origin(ann)
+    if origin is list:
+        return "list", get_args(ann)[0]
+    if origin is dict:
+        return "dict", get_args(ann)[1]
+    if origin in (Union, types.UnionType):
+        args = [_strip(a) for a in get_args(ann)]
+        if all(isinstance(a, type) and issubclass(a, BaseModel) and "type" in a.model_fields for a in args):
+            return "tagged", None
+    return "leaf", ann
+
+
+_ABSENT = object()
+
+
+def _child(node: object, key: str | int) -> object:
+    if isinstance(node, dict) and key in node:
+        return node[key]
+    if isinstance(node, list) and isinstance(key, int) and 0 <= key < len(node):
+        return node[key]
+    return _ABSENT
+
+
+class _At:
+    """Where a pydantic error location points: the key path in the file and the schema there."""
+
+    def __init__(self, loc: Sequence[str | int], raw: object) -> None:
+        self.parts: Parts = []
+        self.model: type[BaseModel] | None = None  # the model holding the last key
+        self.field = None  # its FieldInfo
+        self.ann: Any = None  # the type expected at the location
+        self.is_key = False
+        ann: Any = Mission
+        node = raw
+        for el in loc:
+            kind, inner = _kind(ann) if ann is not None else ("leaf", None)
+            if kind == "tagged":  # pydantic puts the task type in the location: not a key of the file
+                ann = TASK_CLASSES.get(el) if isinstance(el, str) else None
+                continue
+            if el == "[key]":  # a mapping's key, not its value, is wrong
+                self.ann, self.is_key = str, True
+                break
+            if kind == "model":
+                self.model = inner
+                self.field = inner.model_fields.get(el) if isinstance(el, str) else None
+                ann = self.field.annotation if self.field is not None else None
+            elif kind in ("list", "dict"):
+                ann = inner
+            else:
+                ann = None
+            self.parts.append(el)
+            node = _child(node, el)
+        else:
+            self.ann = ann
+        self.value = node
+
+    @property
+    def key(self) -> str:
+        keys = [p for p in self.parts if isinstance(p, str)]
+        return keys[-1] if keys else ""
+
+
+def key_path(parts: Sequence[str | int]) -> str:
+    """['tasks', 1, 'sensor', 'sweep_width_m'] -> 'tasks[1].sensor.sweep_width_m'."""
+    out = ""
+    for p in parts:
+        out += f"[{p}]" if isinstance(p, int) else (f".{p}" if out else str(p))
+    return out or "(top level)"
+
+
+# --- units and what-was-expected ----------------------------------------------------------------------
+
+#: Key suffixes and the unit they mean, longest first.
+UNITS = (
+    ("_per_km", "per kilometre driven"),
+    ("_per_ha", "per hectare"),
+    ("_per_h", "per hour"),
+    ("_mps", "in metres per second"),
+    ("_dbm", "in dBm"),
+    ("_dbi", "in dBi"),
+    ("_deg", "in degrees"),
+    ("_db", "in dB"),
+    ("_hz", "in hertz"),
+    ("_wh", "in watt-hours"),
+    ("_w", "in watts"),
+    ("_m", "in metres"),
+    ("_s", "in seconds"),
+    ("_h", "in hours"),
+)
+_NUMBER_WITH_UNIT = re.compile(r"^\s*[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?\s*[^\d\s.].*$")
+
+
+def unit_of(key: str) -> tuple[str, str]:
+    """(suffix, words) of a key's unit: 'sweep_width_m' -> ('_m', 'in metres'); ('', '') if none."""
+    for suffix, words in UNITS:
+        if key == suffix[1:] or key.endswith(suffix):
+            return suffix, words
+    return "", ""
+
+
+def _number_words(at: _At, integer: bool | None = None) -> str:
+    if integer is None:
+        integer = _strip(at.ann) is int
+    what = "a whole number" if integer else "a number"
+    words = unit_of(at.key)[1]
+    return f"{what} {words}" if words else what
+
+
+def _model_keys(model: type[BaseModel]) -> str:
+    return ", ".join(model.model_fields)
+
+
+def _literal_words(at: _At, ctx: Mapping[str, Any]) -> str:
+    ann = _strip(at.ann)
+    if get_origin(ann) is Literal:
+        return "one of " + ", ".join(repr(a) for a in get_args(ann))
+    return f"one of {ctx.get('expected', '?')}".replace(" or ", ", ")
+
+
+def _short(value: object) -> object:
+    """The found value, or a short description of a big one."""
+    if len(repr(value)) <= 80:
+        return value
+    if isinstance(value, dict):
+        return f"a mapping with keys {', '.join(map(str, list(value)[:8]))}"
+    if isinstance(value, list):
+        return f"a list of {len(value)} items"
+    return repr(value)[:77] + "..."
+
+
+def _describe(error: Mapping[str, Any], raw: object) -> tuple[Parts, object, str]:
+    """(key path parts, found, expected) of one pydantic error."""
+    typ = error["type"]
+    ctx = error.get("ctx") or {}
+    at = _At(error["loc"], raw)
+    parts, value = at.parts, error.get("input")
+    if typ == "extra_forbidden":
+        known = _model_keys(at.model) if at.model is not None else "?"
+        return parts, parts[-1] if parts else value, f"no such key (known keys: {known})"
+    if typ == "missing":
+        desc = ""
+        if at.field is not None and at.field.description:
+            desc = ": " + at.field.description.split(". ")[0].rstrip(".")
+        return parts, "nothing", f"the required key '{at.key}'{desc}"
+    if typ in ("union_tag_invalid", "union_tag_not_found"):
+        tags = ", ".join(repr(t) for t in TASK_CLASSES)
+        found = ctx.get("tag", "nothing")
+        return [*parts, "type"], found, f"a task type, one of {tags}"
+    if typ == "expected":  # the schema's own checks (swarm.mission.schema._expected)
+        if "key" in ctx:
+            parts = [*parts, ctx["key"]]
+        return parts, _short(ctx.get("found", value)), str(ctx["expected"])
+    if typ in ("float_type", "float_parsing", "int_type", "int_parsing", "int_from_float", "finite_number"):
+        integer = typ.startswith("int") or None
+        if typ == "int_type" and _is_plain_number(value):
+            integer = True
+        expected = _number_words(at, integer)
+        if typ == "finite_number":
+            expected = "a finite number" + expected[len("a number") :]
+        suffix = unit_of(at.key)[0]
+        if isinstance(value, str) and _NUMBER_WITH_UNIT.match(value):
+            expected += f", without a unit (the key's '{suffix}' gives it)" if suffix else ", without a unit"
+        return parts, _short(value), expected
+    bounds = {"greater_than": ">", "greater_than_equal": ">=", "less_than": "<", "less_than_equal": "<="}
+    if typ in bounds:
+        limit = next(iter(ctx.values())) if ctx else "?"
+        limit_text = f"{limit:g}" if _is_plain_number(limit) else str(limit)
+        return parts, value, f"{_number_words(at)} {bounds[typ]} {limit_text}"
+    if typ == "literal_error":
+        return parts, _short(value), _literal_words(at, ctx)
+    if typ in ("too_short", "too_long"):
+        n = ctx.get("min_length" if typ == "too_short" else "max_length")
+        side = "at least" if typ == "too_short" else "at most"
+        return parts, _short(value), f"a list of {side} {n} item{'s' if n != 1 else ''}"
+    if typ == "string_too_short":
+        return parts, value, "a non-empty string"
+    if typ == "string_type":
+        return parts, _short(value), "names (string keys)" if at.is_key else "a string"
+    if typ == "bool_type":
+        return parts, _short(value), "true or false"
+    if typ == "list_type":
+        return parts, _short(value), "a list"
+    if typ in ("dict_type", "model_type", "model_attributes_type"):
+        kind, inner = _kind(at.ann) if at.ann is not None else ("leaf", None)
+        keys = f" (keys: {_model_keys(inner)})" if kind == "model" else ""
+        return parts, _short(value), f"a mapping{keys}"
+    return parts, _short(value), str(error.get("msg", typ)).lower()
+
+
+def _is_plain_number(value: object) -> bool:
+    return isinstance(value, int | float) and not isinstance(value, bool)
+
+
+# --- overrides ------------------------------------------------------------------------------------------
+
+
+def _split(key: str) -> list[str]:
+    return key.split(".")
+
+
+def apply_overrides(
+    raw: Mapping[str, Any], overrides: Mapping[str, object], source: str | Path = "overrides"
+) -> dict:
+    """A copy of the mission mapping `raw` with each dotted key path in `overrides` set to its value.
+
+    Paths follow the schema: `swarm.count`, `hazards.surf.wave_height_m`,
+    `tasks.0.sensor.sweep_width_m` (list items by index; a task's keys are those of its type).
+    Sections the file leaves out are created (`hazards.mines.count` on a mission without hazards);
+    a key the schema does not have, an index past the end of a list, or a path into a value is an
+    `InputError(source, KEY_PATH, found, expected)` naming the key. Values are not checked here:
+    validation does that, and reports an overridden value against `source`.
+    """
+    out = copy.deepcopy(dict(raw))
+    for path, value in overrides.items():
+        if not isinstance(path, str) or not path:
+            raise InputError(source, str(path), path, "a dotted key path of the mission, e.g. swarm.count")
+        parts = _split(path)
+        node: Any = out
+        ann: Any = Mission
+        for i, part in enumerate(parts):
+            last = i == len(parts) - 1
+            kind, inner = _kind(ann)
+            here = ".".join(parts[:i]) or "the mission"
+            if kind == "tagged":  # a task: its keys are those of its type
+                tag = node.get("type") if isinstance(node, dict) else None
+                if tag not in TASK_CLASSES:
+                    raise InputError(
+                        source,
+                        path,
+                        tag,
+                        f"a task with a valid type at {here} (one of {', '.join(TASK_CLASSES)})",
+                    )
+                kind, inner = "model", TASK_CLASSES[tag]
+            if kind == "model":
+                if part not in inner.model_fields:
+                    raise InputError(
+                        source, path, part, f"a key of {here} (known keys: {_model_keys(inner)})"
+                    )
+                ann, key = inner.model_fields[part].annotation, part
+            elif kind == "dict":
+                ann, key = inner, part
+            elif kind == "list":
+                size = len(node) if isinstance(node, list) else 0
+                if not part.isdigit() or int(part) >= size:
+                    span = f"0..{size - 1}" if size else "none: the list is empty"
+                    raise InputError(source, path, part, f"an index of an item of {here} ({span})")
+                ann, key = inner, int(part)
+            else:  # pragma: no cover - a leaf is refused one step earlier
+                raise InputError(source, path, part, f"a path ending at {here} (it holds a value, not keys)")
+            if last:
+                node[key] = copy.deepcopy(value)
+                break
+            child = _child(node, key)
+            next_kind = _kind(ann)[0]
+            inside = f"{here}.{part}" if i else part
+            if next_kind == "leaf":
+                raise InputError(
+                    source, path, parts[i + 1], f"a path ending at {inside} (it holds a value, not keys)"
+                )
+            if child is _ABSENT or child is None:
+                if next_kind == "list":
+                    raise InputError(
+                        source, path, parts[i + 1], f"an index of an item of {inside} (the mission has none)"
+                    )
+                child = node[key] = {}
+            elif not isinstance(child, dict | list):
+                raise InputError(source, path, child, f"a mapping at {here}.{part} in the mission")
+            node = child
+    return out
+
+
+# --- validation and references --------------------------------------------------------------------------
+
+
+class _Report:
+    """Raises InputError against the mission file, or against the overrides for overridden keys."""
+
+    def __init__(self, source: str, overrides: Mapping[str, object], overrides_source: str) -> None:
+        self.source = source
+        self.override_paths = [_split(k) for k in overrides]
+        self.overrides_source = overrides_source
+
+    def error(self, parts: Sequence[str | int], found: object, expected: str) -> InputError:
+        text = [str(p) for p in parts]
+        overridden = any(text[: len(o)] == o for o in self.override_paths)
+        source = f"{self.overrides_source} (over {self.source})" if overridden else self.source
+        return InputError(source, key_path(parts), found, expected)
+
+
+def _display(path: Path) -> str:
+    return os.path.normpath(path)
+
+
+def _bundled(kind: str) -> Path:
+    return Path(str(resources.files("swarm") / "data" / kind))
+
+
+def _resolve(value: str, base_dir: Path, bundled: str | None = None) -> Path:
+    """A path relative to the mission file, or a bundled data file named without suffix or folder."""
+    p = Path(value)
+    if bundled is not None and len(p.parts) == 1 and p.suffix not in (".yaml", ".yml"):
+        return _bundled(bundled) / f"{value}.yaml"
+    return Path(_display(p if p.is_absolute() else base_dir / p))
+
+
+def _need_file(report: _Report, parts: Parts, value: str, path: Path, what: str, bundled: str | None) -> None:
+    if path.is_file():
+        return
+    if bundled is not None and len(Path(value).parts) == 1 and Path(value).suffix not in (".yaml", ".yml"):
+        names = ", ".join(sorted(p.stem for p in _bundled(bundled).glob("*.yaml")))
+        expected = f"a bundled {what} ({names}) or the path of a {what} relative to the mission file"
+    else:
+        expected = (
+            f"an existing {what} ({_display(path)} does not exist; paths are relative to the mission file)"
+        )
+    raise report.error(parts, value, expected)
+
+
+class _References:
+    def __init__(self, mission: Mission, report: _Report, base_dir: Path) -> None:
+        from swarm.planning.profiles import DEFAULT_PROFILE, load_profile
+        from swarm.robot.params import load_robot
+        from swarm.robot.terrain import load_library
+        from swarm.world.io import load_map
+
+        self.mission, self.report = mission, report
+        r: dict[str, Any] = {}
+        r["robot_path"] = _resolve(mission.robot.file, base_dir, "robots")
+        _need_file(report, ["robot", "file"], mission.robot.file, r["robot_path"], "robot YAML", "robots")
+        r["terrain_path"] = None
+        if mission.robot.terrain is not None:
+            r["terrain_path"] = _resolve(mission.robot.terrain, base_dir, "terrain")
+            _need_file(
+                report,
+                ["robot", "terrain"],
+                mission.robot.terrain,
+                r["terrain_path"],
+                "terrain YAML",
+                "terrain",
+            )
+        r["map_path"] = _resolve(mission.map, base_dir)
+        _need_file(report, ["map"], mission.map, r["map_path"], "map YAML", None)
+        r["planner_path"] = None
+        if mission.planner is not None:
+            r["planner_path"] = _resolve(mission.planner, base_dir)
+            _need_file(report, ["planner"], mission.planner, r["planner_path"], "planner profile YAML", None)
+
+        r["robot_params"] = load_robot(r["robot_path"])
+        r["terrain_library"] = load_library(r["terrain_path"])
+        r["beach_map"] = load_map(r["map_path"], r["terrain_library"])
+        r["planner_profile"] = load_profile(r["planner_path"]) if r["planner_path"] else DEFAULT_PROFILE
+        self.resolved = r
+        self.map = r["beach_map"]
+        self.library = r["terrain_library"]
+        self.map_name = _display(r["map_path"])
+
+    # one reference -------------------------------------------------------------------------------
+    def place(
+        self,
+        parts: Parts,
+        value: str | tuple[float, float],
+        kinds: tuple[str, ...],
+        ground: str | None = None,
+        why: str = "",
+        points_ok: bool = True,
+    ):
+        """Check a region name (of one of `kinds`) or a point; `ground`: 'water', 'land' or None."""
+        bm = self.map
+        kind_words = " or ".join(kinds)
+        if isinstance(value, str):
+            region = bm.regions.get(value)
+            if region is None or region.kind not in kinds:
+                names = sorted(r.name for r in bm.regions.values() if r.kind in kinds)
+                instead = "; give [x, y] in metres instead" if points_ok else ""
+                listed = f"({', '.join(names)})" if names else f"(it has none{instead})"
+                expected = f"a {kind_words} region of {self.map_name} {listed}"
+                if region is not None:
+                    expected += f"; '{value}' is a {region.kind} region"
+                raise self.report.error(parts, value, expected)
+            geom = region.geometry
+            point = geom if geom.geom_type == "Point" else geom.representative_point()
+            x, y = point.x, point.y
+            found: object = value
+        else:
+            x, y = value
+            found = [x, y]
+            xmin, ymin, xmax, ymax = bm.bounds_m
+            if not bool(bm.contains(x, y)):
+                raise self.report.error(
+                    parts,
+                    found,
+                    f"a point inside {self.map_name} (x {xmin:g}..{xmax:g}, y {ymin:g}..{ymax:g} m)",
+                )
+        if ground is not None:
+            mode_name = bm.terrain_classes[int(bm.terrain_at(x, y))]
+            mode = self.library[mode_name]
+            if ground == "water" and not mode.is_water:
+                raise self.report.error(parts, found, f"a point in the water{why}; it is on {mode_name}")
+            if ground == "land" and (mode.is_water or not mode.passable):
+                raise self.report.error(
+                    parts, found, f"a point on passable dry ground{why}; it is on {mode_name}"
+                )
+        return x, y
+
+    def region(self, parts: Parts, name: str, kinds: tuple[str, ...]) -> None:
+        self.place(parts, name, kinds, points_ok=False)
+
+    # the whole mission --------------------------------------------------------------------------------
+    def check(self) -> None:
+        m, err = self.mission, self.report.error
+        count = m.swarm.count
+        beach_limit = m.phases.beach_operations.time_limit_s
+
+        # launch
+        launch = m.launch
+        sea = launch.platform != "beach"
+        if not sea and launch.offshore_m not in (None, 0.0):
+            raise err(["launch", "offshore_m"], launch.offshore_m, "0 (or no value) for platform 'beach'")
+        ground = "water" if sea else "land"
+        why = f" for platform '{launch.platform}'"
+        if launch.points is None:
+            if not sea:
+                raise err(
+                    ["launch", "points"],
+                    "nothing",
+                    "points on the beach, [x, y] in metres, for platform 'beach'",
+                )
+            if not self.map.regions_of_kind("launch"):
+                raise err(
+                    ["launch", "points"], "nothing", f"launch points: {self.map_name} has no launch region"
+                )
+            for region in self.map.regions_of_kind("launch"):
+                self.place(["launch", "points"], region.name, ("launch",), ground, why)
+        for i, p in enumerate(launch.points or []):
+            self.place(["launch", "points", i], p, ("launch",), ground, why)
+        reach_m = m.phases.sea_transit.time_limit_s * m.robot.swim_speed_mps
+        if sea and launch.release_offshore_m > reach_m:
+            raise err(
+                ["launch", "offshore_m"] if launch.offshore_m is not None else ["launch", "platform"],
+                launch.offshore_m if launch.offshore_m is not None else launch.platform,
+                f"a release point the robots can swim from in time: at most {reach_m:g} m offshore "
+                f"(phases.sea_transit.time_limit_s {m.phases.sea_transit.time_limit_s:g} s at "
+                f"robot.swim_speed_mps {m.robot.swim_speed_mps:g}); platform '{launch.platform}' releases "
+                f"{launch.release_offshore_m:g} m out",
+            )
+        back = m.phases.return_to_sea
+        for i, p in enumerate(back.points or []):
+            self.place(
+                ["phases", "return_to_sea", "points", i], p, ("launch",), "water", " (a pick-up point)"
+            )
+
+        # tasks
+        names: dict[str, int] = {}
+        for t, task in enumerate(m.tasks):
+            at: Parts = ["tasks", t]
+            label = m.task_label(t)
+            if label in names:
+                raise err([*at, "name"], label, f"a name no other task has (tasks[{names[label]}] has it)")
+            names[label] = t
+            if task.type == "landing":
+                for i, zone in enumerate(task.zones):
+                    self.region([*at, "zones", i], zone, ("landing_zone",))
+                    if task.zones.index(zone) != i:
+                        raise err([*at, "zones", i], zone, "each landing zone once")
+                self._robots([*at, "robots_per_zone"], task.robots_per_zone, len(task.zones), "zones", count)
+            elif task.type == "search":
+                self._search(at, task, count, m.phases.beach_end_s)
+            elif task.type == "relay":
+                self.place([*at, "source"], task.source, ("relay_source",))
+                for i, sink in enumerate(task.sinks):
+                    self.place([*at, "sinks", i], sink, ("relay_sink",), "land", " (a relay sink)")
+            elif task.type == "surveillance":
+                for i, point in enumerate(task.points):
+                    self.place(
+                        [*at, "points", i], point, ("observation_point",), "land", " (an observation point)"
+                    )
+                self._robots(
+                    [*at, "robots_per_point"], task.robots_per_point, len(task.points), "points", count
+                )
+                if task.dwell_s > beach_limit:
+                    raise err(
+                        [*at, "dwell_s"],
+                        task.dwell_s,
+                        f"at most phases.beach_operations.time_limit_s ({beach_limit:g} s)",
+                    )
+            elif task.type == "beacon":
+                for i, point in enumerate(task.points):
+                    self.place([*at, "points", i], point, ("beacon",), "land", " (a beacon)")
+                self._robots(
+                    [*at, "robots_per_point"], task.robots_per_point, len(task.points), "points", count
+                )
+                if task.hold_s is not None and task.hold_s > beach_limit:
+                    raise err(
+                        [*at, "hold_s"],
+                        task.hold_s,
+                        f"at most phases.beach_operations.time_limit_s ({beach_limit:g} s)",
+                    )
+
+        # hazards
+        hz = m.hazards
+        for mode in hz.immobilization.mode_factors:
+            if mode not in self.library:
+                raise err(
+                    ["hazards", "immobilization", "mode_factors", mode],
+                    mode,
+                    f"a terrain mode, one of {', '.join(sorted(self.library))}",
+                )
+        mines = hz.mines
+        if mines.area is not None:
+            self.region(["hazards", "mines", "area"], mines.area, ("search_area", "landing_zone", "keep_out"))
+        elif (mines.count or mines.density_per_ha) and not m.tasks_of("search"):
+            raise err(
+                ["hazards", "mines", "area"],
+                "nothing",
+                "a region to lay the mines in (by default the search areas; this mission has none)",
+            )
+
+        # success
+        rec = m.success.min_robots_recovered
+        if rec > count:
+            raise err(["success", "min_robots_recovered"], rec, f"at most swarm.count ({count})")
+        if rec > 0 and not back.enabled:
+            raise err(
+                ["success", "min_robots_recovered"], rec, "0 when phases.return_to_sea.enabled is false"
+            )
+
+    def _robots(self, parts: Parts, per: int, n: int, what: str, count: int) -> None:
+        if per * n > count:
+            raise self.report.error(
+                parts,
+                per,
+                f"at most {count // n}: {n} {what} x {per} robots is more than swarm.count ({count})",
+            )
+
+    def _search(self, at: Parts, task: SearchTask, count: int, beach_end_s: float) -> None:
+        err = self.report.error
+        self.region([*at, "area"], task.area, ("search_area",))
+        if task.robots is not None and task.robots > count:
+            raise err([*at, "robots"], task.robots, f"at most swarm.count ({count})")
+        if task.clearance is not None:
+            if not task.mark:
+                raise err(
+                    [*at, "mark"],
+                    task.mark,
+                    "true with a clearance (the robots loitering on the marked mines set them off)",
+                )
+            if task.clearance.at_s > beach_end_s:
+                raise err(
+                    [*at, "clearance", "at_s"],
+                    task.clearance.at_s,
+                    f"a time before beach operations end, at most {beach_end_s:g} s (the sum of the "
+                    "sea_transit, surf_crossing and beach_operations time limits)",
+                )
+
+
+def mission_from_dict(
+    raw: Mapping[str, Any],
+    source: str | Path = "<mission>",
+    base_dir: str | Path | None = None,
+    overrides: Mapping[str, object] | None = None,
+    overrides_source: str = "overrides",
+    check_references: bool = True,
+) -> Mission:
+    """Validate a mission mapping (as read from YAML); `base_dir` is where its paths are relative to
+    (default: the folder of `source`). See `load_mission`."""
+    source = str(source)
+    overrides = dict(overrides or {})
+    report = _Report(source, overrides, overrides_source)
+    data = apply_overrides(raw, overrides, overrides_source) if overrides else dict(raw)
+    try:
+        mission = Mission.model_validate(data)
+    except ValidationError as exc:
+        first = exc.errors(include_url=False)[0]
+        parts, found, expected = _describe(first, data)
+        raise report.error(parts, found, expected) from None
+    if mission.name is None:
+        mission = mission.model_copy(update={"name": Path(source).stem})
+    mission._source = source
+    if check_references:
+        base = Path(base_dir) if base_dir is not None else Path(source).parent
+        refs = _References(mission, report, base)
+        refs.check()
+        mission._resolved = refs.resolved
+    return mission
+
+
+def load_mission(
+    path: str | Path,
+    overrides: Mapping[str, object] | None = None,
+    overrides_source: str = "overrides",
+) -> Mission:
+    """Read, override, validate and check a mission file; bad input raises one `InputError`:
+    `missions/x.yaml: tasks[1].sensor.sweep_width_m: found -2, expected a number in metres > 0`.
+    Errors in an overridden key name `overrides_source` (e.g. "--set" or a study file) instead."""
+    raw = read_mission_yaml(path)
+    return mission_from_dict(raw, path, overrides=overrides, overrides_source=overrides_source)

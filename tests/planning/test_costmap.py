@@ -1,0 +1,172 @@
+"""The planner's cost map: terrain cost from the skid model, impassable ground, the footprint."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from conftest import CELL_M, WALL_COL, wall_map
+
+from swarm.planning.costmap import (
+    FREE,
+    IMPASSABLE_TERRAIN,
+    NO_TRACTION,
+    TOO_STEEP,
+    EndpointError,
+    NoPathError,
+    build_costmap,
+    mode_speeds,
+    robot_half_width_m,
+)
+from swarm.planning.costmap import KEEP_OUT as KEEP_OUT_CODE
+from swarm.robot.terrain import load_library
+from swarm.world.beachmap import BeachMap
+
+
+def test_mode_speeds_one_vectorized_run_cost_per_metre(robot):
+    lib = load_library()
+    speeds = mode_speeds(lib, robot)
+    cost = dict(zip(speeds.names, speeds.cost_per_m, strict=True))
+    speed = dict(zip(speeds.names, speeds.speed_mps, strict=True))
+    # the fastest dry, passable mode is the reference at exactly 1.0 per metre
+    assert cost[speeds.reference_mode] == pytest.approx(1.0)
+    assert not lib[speeds.reference_mode].is_water
+    assert all(c >= 1.0 - 1e-12 for n, c in cost.items() if lib[n].passable and not lib[n].is_water)
+    # cost is time: reference speed over the mode's speed
+    assert cost["soft_sand"] == pytest.approx(speeds.reference_speed_mps / speed["soft_sand"])
+    # soft sand, vegetation and surf are dearer than hard pack
+    for dear in ("soft_sand", "vegetation", "surf"):
+        assert cost[dear] > cost["wet_hard_sand"] > 0
+    # deep water: no traction, no progress: impassable for ground planning
+    assert speed["deep_water"] < 0.05 * speeds.nominal_wheel_speed_mps
+    assert math.isinf(cost["deep_water"])
+
+
+def test_half_width_is_the_wider_of_body_and_wheels(robot):
+    assert robot_half_width_m(robot) == pytest.approx(max(robot.width_m, robot.track_width_m) / 2)
+
+
+def test_reasons_for_impassable_cells(wall_costmap):
+    cm = wall_costmap
+    assert (cm.reason[:, WALL_COL][cm.terrain[:, WALL_COL] == 2] == IMPASSABLE_TERRAIN).all()
+    assert (cm.reason[:3, :] == NO_TRACTION).all()
+    # keep-out: exactly the cells whose interior the square (4..9, 14..18) meets
+    rows, cols = np.nonzero(cm.reason == KEEP_OUT_CODE)
+    assert (rows.min(), rows.max(), cols.min(), cols.max()) == (28, 35, 8, 17)
+    assert cm.reason[20, 5] == FREE
+
+
+def test_footprint_inflation_is_exact(wall_costmap):
+    """A cell is blocked iff some point of it is closer than half-width + margin to impassable
+    ground or the map edge: brute force over cell squares."""
+    cm = wall_costmap
+    rows, cols = cm.shape
+    imp = np.argwhere(cm.reason != FREE)
+    radius = cm.half_width_m + cm.resolution_m / 2
+    for r in range(rows):
+        for c in range(cols):
+            gap = np.hypot(
+                np.maximum(np.abs(imp[:, 0] - r) - 1, 0), np.maximum(np.abs(imp[:, 1] - c) - 1, 0)
+            ).min()
+            edge = min(r, c, rows - 1 - r, cols - 1 - c)  # cells between this one and the edge
+            clearance = min(gap, edge) * CELL_M
+            assert cm.clearance_m[r, c] == pytest.approx(clearance), (r, c)
+            assert cm.blocked[r, c] == (clearance < radius), (r, c)
+
+
+def test_slope_steeper_than_the_mode_allows_is_impassable(robot):
+    lib = load_library()
+    limit = lib["soft_sand"].max_climb_slope_deg
+    rows, cols = 20, 20
+    elevation = np.zeros((rows, cols), dtype=np.float32)
+    x = np.arange(cols) * 0.5
+    # a ramp a little steeper than soft sand allows in columns 8..11, gentle elsewhere
+    steep = math.tan(math.radians(limit + 3))
+    gentle = math.tan(math.radians(limit - 5))
+    elevation[:] = np.where((x >= 4) & (x < 6), steep, gentle).cumsum() * 0.5
+    bm = BeachMap("slope", 0.5, (0.0, 0.0), ("soft_sand",), np.zeros((rows, cols), np.int8), elevation)
+    cm = build_costmap(bm, robot)
+    too_steep = cm.reason == TOO_STEEP
+    assert too_steep.any()
+    assert (bm.slope_deg[too_steep] > limit).all()
+    assert (bm.slope_deg[~too_steep] <= limit).all()
+    with pytest.raises(EndpointError, match=r"slope, steeper than the robot can climb on soft_sand"):
+        r, c = np.argwhere(too_steep)[0]
+        cm.check_endpoints(cm.center_of(r, c), (1.0, 1.0))
+
+
+def test_segment_cost_is_the_exact_integral(robot):
+    rng = np.random.default_rng(3)
+    terrain = rng.integers(0, 2, size=(40, 60)).astype(np.int8)
+    bm = BeachMap(
+        "mix", 0.5, (10.0, -5.0), ("wet_hard_sand", "soft_sand"), terrain, np.zeros((40, 60), np.float32)
+    )
+    cm = build_costmap(bm, robot)
+    p0 = rng.uniform((10, -5), (40, 15), size=(200, 2))
+    p1 = np.clip(p0 + rng.normal(0, 6, size=(200, 2)), (10, -5), (40 - 1e-9, 15 - 1e-9))
+    p1[:5] = p0[:5] + np.array([1.0, 0.0])  # axis-aligned
+    p0[5], p1[5] = (10.5, -4.5), (20.5, 5.5)  # through cell corners
+    exact = cm.segments_cost(p0, p1)
+    fast = cm.segment_cost_function()
+    for a, b, e in zip(p0, p1, exact, strict=True):
+        n = 20000
+        t = (np.arange(n) + 0.5) / n
+        pts = a + t[:, None] * (b - a)
+        r, c = cm.cell_of(pts[:, 0], pts[:, 1])
+        dense = cm.cost_per_m[r, c].astype(float).mean() * np.hypot(*(b - a))
+        assert e == pytest.approx(dense, rel=2e-3, abs=1e-9)
+        assert fast(a[0], a[1], b[0], b[1]) == pytest.approx(e, rel=1e-12, abs=1e-12)
+
+
+def test_point_problems_are_one_clear_line(wall_costmap):
+    cm = wall_costmap
+    cases = {
+        (40.0, 5.0): "outside the map 'wall'",
+        (15.2, 5.0): "is on boulder, impassable terrain",
+        (6.0, 16.0): "inside keep-out zone 'minefield'",
+        (14.8, 5.25): "too close to boulder (impassable) at (15.25, 5.25) for the robot's footprint",
+        (5.0, 0.5): "deep_water, where the robot makes no progress",
+        (9.2, 16.0): "too close to keep-out zone 'minefield'",
+        (20.0, 19.9): "too close to the map edge",
+    }
+    for point, expected in cases.items():
+        with pytest.raises(EndpointError) as err:
+            cm.check_endpoints(point, (25.0, 10.0))
+        message = str(err.value)
+        assert message.startswith(f"start ({point[0]:g}, {point[1]:g}) ")
+        assert expected in message
+        assert "\n" not in message
+    with pytest.raises(EndpointError, match=r"^goal \(15\.2, 5\) is on boulder"):
+        cm.check_endpoints((3.0, 5.0), (15.2, 5.0))
+    assert cm.point_problem(3.0, 5.0) is None
+
+
+def test_no_path_when_the_wall_has_no_gap(robot):
+    cm = build_costmap(wall_map(gap=False), robot)
+    with pytest.raises(
+        NoPathError, match=r"^no path from start \(3, 4\) to goal \(27, 4\): impassable ground"
+    ):
+        cm.check_endpoints((3.0, 4.0), (27.0, 4.0))
+
+
+def test_keep_out_line_blocks_even_along_grid_lines(robot):
+    from shapely.geometry import LineString
+
+    from swarm.world.beachmap import Region
+
+    fence = LineString([(0.0, 10.0), (30.0, 10.0)])  # exactly on a grid line
+    bm = wall_map(keep_out=False)
+    bm = BeachMap(
+        bm.name,
+        bm.cell_m,
+        bm.origin_m,
+        bm.terrain_classes,
+        bm.terrain,
+        bm.elevation_m,
+        {"fence": Region("fence", "keep_out", fence)},
+    )
+    cm = build_costmap(bm, robot)
+    assert (cm.reason[19:21, :] == KEEP_OUT_CODE).all()
+    with pytest.raises(NoPathError):
+        cm.check_endpoints((3.0, 5.0), (3.0, 15.0))
