@@ -74,6 +74,7 @@ def _parser() -> argparse.ArgumentParser:
     calibrate.set_defaults(handler=_cmd_calibrate)
     _add_map_commands(commands)
     _add_path_command(commands)
+    _add_plan_command(commands)
     schema = commands.add_parser("schema", help="print the mission file JSON Schema (for editors)")
     schema.set_defaults(handler=_cmd_schema)
     return parser
@@ -457,6 +458,66 @@ def _add_path_command(commands) -> None:
     )
     bench.add_argument("-o", "--out", type=Path, metavar="bench.log", help="benchmark log to write")
     path.set_defaults(handler=_cmd_path)
+
+
+# --- swarm plan: a mission plan (swarm/mission/plan.py) ---------------------------------------------
+def _add_plan_command(commands) -> None:
+    """`swarm plan MISSION.yaml [--seed N] [--out DIR]`."""
+    plan = commands.add_parser(
+        "plan", help="allocate a mission's tasks, plan every robot's route, write plan and report"
+    )
+    plan.add_argument("mission", type=Path, metavar="MISSION.yaml")
+    plan.add_argument(
+        "--seed",
+        type=int,
+        help="random seed (default: the mission's seed): same seed, byte-identical plan.json",
+    )
+    plan.add_argument(
+        "--out",
+        type=Path,
+        metavar="DIR",
+        help="output folder (default: reports/<mission>-<YYYYmmdd-HHMMSS>/)",
+    )
+    plan.add_argument("--workers", type=int, help="planning processes (default: the CPU count)")
+    plan.set_defaults(handler=_cmd_plan)
+
+
+def _cmd_plan(args: argparse.Namespace) -> int:
+    import time
+
+    from tqdm import tqdm
+
+    from swarm.mission import load_mission
+    from swarm.mission.plan import plan_mission, write_plan
+    from swarm.report.plan_report import summary_rows, write_plan_report
+
+    if args.seed is not None and args.seed < 0:
+        raise InputError("command line", "--seed", args.seed, "a seed >= 0")
+    if args.workers is not None and args.workers < 1:
+        raise InputError("command line", "--workers", args.workers, "at least 1")
+    if not args.mission.is_file():
+        raise InputError("command line", "MISSION.yaml", str(args.mission), "an existing mission YAML file")
+    mission = load_mission(args.mission)
+    out = args.out or Path("reports") / f"{mission.name}-{time.strftime('%Y%m%d-%H%M%S')}"
+    if out.exists() and not out.is_dir():
+        raise InputError("command line", "--out", str(out), "a folder (this is a file)")
+    with tqdm(desc="planning routes", unit="route", file=sys.stderr, leave=False) as bar:
+
+        def progress(done: int, total: int) -> None:
+            bar.total = total
+            bar.n = done
+            bar.refresh()
+
+        seed = mission.seed if args.seed is None else args.seed
+        plan = plan_mission(mission, seed=seed, progress=progress, workers=args.workers)
+    paths = {**write_plan(plan, out), **write_plan_report(plan, out)}
+    print(f"plan for {plan.mission} on {plan.map}, seed {plan.seed}")
+    rows = summary_rows(plan)
+    width = max(len(k) for k, _ in rows)
+    for key, value in rows:
+        print(f"  {key.ljust(width)}  {value}")
+    print(f"wrote {', '.join(p.name for p in paths.values())} in {out}")
+    return 0
 
 
 def _xy_arg(option: str, value: str | None) -> tuple[float, float] | None:

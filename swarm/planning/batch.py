@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import multiprocessing
 import os
-from collections.abc import Sequence
+from collections.abc import Callable, Iterable, Sequence
 from concurrent.futures import ProcessPoolExecutor
 
 import numpy as np
@@ -71,8 +71,13 @@ def plan_many(
     workers: int | None = None,
     roadmap: Roadmap | None = None,
     strict: bool = True,
+    progress: Callable[[int, int], None] | None = None,
+    label: str = "pair",
 ) -> list[PathResult | None]:
     """Plan a path for each (start, goal) pair, in input order, on `workers` processes.
+
+    `progress(done, total)` is called as paths finish (in input order); `label` names a pair in
+    error messages ("pair 3", "robot route 3").
 
     Every endpoint is checked first: a bad one raises `EndpointError` / `NoPathError` naming the
     pair before any planning. `workers` defaults to the CPU count (at most one per pair);
@@ -87,16 +92,24 @@ def plan_many(
         raise ValueError(f"pairs must be (n, 2, 2): n pairs of (start xy, goal xy), not {pts.shape}")
     n = len(pts)
     for i, (start, goal) in enumerate(pts):
-        cm.check_endpoints(start, goal, who=f"pair {i}")
+        cm.check_endpoints(start, goal, who=f"{label} {i}")
     if profile.roadmap is not None and roadmap is None:
         roadmap = build_roadmap(cm, profile, seed)
     seeds = pair_seeds(seed, n)
     tasks = [(i, pts[i, 0], pts[i, 1], seeds[i]) for i in range(n)]
     workers = min(os.cpu_count() or 1, n) if workers is None else max(1, min(int(workers), n))
+    outcomes: list[tuple[int, PathResult | str]] = []
+
+    def collect(iterable: Iterable[tuple[int, PathResult | str]]) -> None:
+        for outcome in iterable:
+            outcomes.append(outcome)
+            if progress is not None:
+                progress(len(outcomes), n)
+
     if workers == 1:
         _init_worker(cm, profile, roadmap)
         try:
-            outcomes = [_plan_one(t) for t in tasks]
+            collect(_plan_one(t) for t in tasks)
         finally:
             _WORKER.clear()
     else:
@@ -107,12 +120,12 @@ def plan_many(
             initializer=_init_worker,
             initargs=(cm, profile, roadmap),
         ) as pool:
-            outcomes = list(pool.map(_plan_one, tasks, chunksize=chunk))
+            collect(pool.map(_plan_one, tasks, chunksize=chunk))
     results: list[PathResult | None] = []
     for index, outcome in outcomes:
         if isinstance(outcome, str):
             if strict:
-                raise NoPathError(f"pair {index}: {outcome}")
+                raise NoPathError(f"{label} {index}: {outcome}")
             results.append(None)
         else:
             results.append(outcome)

@@ -27,9 +27,8 @@ import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import yaml
-
 from swarm.errors import InputError
+from swarm.files import read_yaml
 
 #: OMPL geometric planners a profile may name (those the ompl Python bindings provide).
 PLANNERS = (
@@ -280,14 +279,4 @@ def profile_from_dict(
 def load_profile(path: str | Path) -> PlannerProfile:
     """Read a planner profile YAML; bad keys or values raise `InputError` naming file and key."""
     path = Path(path)
-    try:
-        text = path.read_text()
-    except OSError as exc:
-        raise InputError(path, "(file)", exc.strerror, "a readable planner profile YAML file") from None
-    try:
-        data = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f"line {mark.line + 1}" if mark else "(file)"
-        raise InputError(path, where, "invalid YAML", "a YAML mapping") from None
-    return profile_from_dict(data, path, name=path.stem)
+    return profile_from_dict(read_yaml(path, "planner profile YAML file"), path, name=path.stem)

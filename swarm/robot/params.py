@@ -5,9 +5,8 @@ from __future__ import annotations
 from dataclasses import dataclass, fields
 from pathlib import Path
 
-import yaml
-
 from swarm.errors import InputError
+from swarm.files import read_yaml
 
 GRAVITY_MPS2 = 9.80665
 
@@ -129,15 +128,4 @@ def robot_from_dict(data: object, source: str | Path = "<robot>") -> RobotParams
 
 def load_robot(path: str | Path) -> RobotParams:
     """Read a robot YAML file; bad keys or values raise `InputError` naming file and key."""
-    path = Path(path)
-    try:
-        text = path.read_text()
-    except OSError as exc:
-        raise InputError(path, "(file)", exc.strerror, "a readable robot YAML file") from None
-    try:
-        data = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f"line {mark.line + 1}" if mark else "(file)"
-        raise InputError(path, where, "invalid YAML", "a YAML mapping") from None
-    return robot_from_dict(data, path)
+    return robot_from_dict(read_yaml(path, "robot YAML file"), path)

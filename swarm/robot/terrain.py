@@ -18,6 +18,7 @@ import numpy as np
 import yaml
 
 from swarm.errors import InputError
+from swarm.files import read_yaml
 
 #: The coefficients a mode carries, with what each must be. Order matters: it is the column
 #: order of `TerrainTable` and of calibration vectors.
@@ -268,20 +269,6 @@ def library_from_dict(data: object, source: str | Path, base: TerrainLibrary | N
     return TerrainLibrary(modes)
 
 
-def _read_yaml(path: Path) -> object:
-    try:
-        text = path.read_text()
-    except OSError as exc:
-        raise InputError(path, "(file)", exc.strerror, "a readable terrain YAML file") from None
-    try:
-        return yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        raise InputError(
-            path, f"line {mark.line + 1}" if mark else "(file)", "invalid YAML", "YAML"
-        ) from None
-
-
 def default_library() -> TerrainLibrary:
     """The bundled modes with their literature defaults (swarm/data/terrain_modes.yaml)."""
     ref = resources.files("swarm") / "data" / "terrain_modes.yaml"
@@ -294,7 +281,7 @@ def load_library(path: str | Path | None = None) -> TerrainLibrary:
     if path is None:
         return base
     path = Path(path)
-    return base.merged(library_from_dict(_read_yaml(path), path, base))
+    return base.merged(library_from_dict(read_yaml(path, "terrain YAML file"), path, base))
 
 
 def with_coefficients(mode: TerrainMode, **coeffs: float) -> TerrainMode:

@@ -49,7 +49,7 @@ from shapely.geometry.base import BaseGeometry
 from shapely.validation import explain_validity
 
 from swarm.errors import InputError
-from swarm.files import atomic_path, write_text_atomic
+from swarm.files import atomic_path, parse_yaml, write_text_atomic
 from swarm.robot.terrain import TerrainLibrary, load_library
 from swarm.world.beachmap import REGION_KINDS, BeachMap, Region
 
@@ -251,13 +251,7 @@ def load_geojson_regions(
 
 
 def _read_yaml(path: Path) -> object:
-    text = _read_text(path, "map YAML file")
-    try:
-        return yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f"line {mark.line + 1}" if mark else "(file)"
-        raise InputError(path, where, getattr(exc, "problem", None) or "invalid YAML", "YAML") from None
+    return parse_yaml(_read_text(path, "map YAML file"), path)
 
 
 def _load_grid(path: Path, source: Path) -> tuple[np.ndarray, np.ndarray]:

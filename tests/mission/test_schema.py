@@ -100,7 +100,7 @@ def test_shipped_missions_cover_every_task_type_platform_and_map():
 def test_yaml_exponent_floats_are_numbers():
     """`915e6` is a string to YAML 1.1 (PyYAML) but a number to YAML 1.2 and to editors: a number here."""
     relay = load_mission(REPO / "missions" / "relay.yaml")
-    assert relay.tasks[0].radio.frequency_hz == 915e6
+    assert relay.tasks[0].radio.frequency_hz == 2.4e9
 
 
 def test_defaults_fill_what_a_file_leaves_out(monkeypatch):

@@ -1,0 +1,583 @@
+"""Building a `MissionPlan` from a loaded mission: who does what, by which route, arriving when.
+
+```python
+mission = load_mission("missions/landing.yaml")
+plan = plan_mission(mission, seed=0)
+write_plan(plan, "reports/landing")  # plan.json + plan.geojson
+```
+
+1. Launch. Robot i is released at launch point ``i mod n_points`` at ``i * launch.interval_s``;
+   it swims `launch.release_offshore_m` to the launch point, then on to its *entry*: a plannable
+   cell at the seaward edge of the ground it can drive on (deep water, and surf too steep for
+   traction, are not ground: `CostMap.blocked`). The entry is the edge cell (free, next to
+   blocked water) in the goal's connected region nearest the launch point, preferring, within
+   `ENTRY_SLACK_M` of the nearest, the one that shortens the way to the goal.
+2. Tasks become slots: each landing zone x robots_per_zone (points spread inside the zone), each
+   relay position of `plan_relays`, each observation point and beacon x robots per point, then
+   the searchers of each search task (``robots``, else the robots still free, shared among the
+   search tasks that did not say), each starting at its share of the boustrophedon tracks
+   (`split_tracks`). `assign` fills slots by straight-line distance from the launch points;
+   robots left over are spares (they swim to their entry and wait there).
+3. Ground routes: one OMPL path per robot from its entry to its slot, all planned seeded as
+   `plan_many` plans them (the same per-pair seeds), with an optional progress callback.
+4. ETA = release offset + swim (offshore + sea leg) at robot.swim_speed_mps + the path's
+   terrain-speed time `PathResult.time_s`.
+
+Nothing here draws from a global RNG or reads the clock: the same mission and seed give the same
+plan, and `write_plan` the same bytes.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import shapely
+from scipy import ndimage
+from shapely.geometry import LineString
+
+from swarm.errors import SwarmError
+from swarm.files import write_text_atomic
+from swarm.mission.schema import Mission
+from swarm.planning import CostMap, PlanningError, build_costmap
+from swarm.planning.allocation import assign
+from swarm.planning.batch import plan_many
+from swarm.planning.coverage import boustrophedon, detection_probability, split_tracks, swath_coverage
+from swarm.planning.radio import RadioParams, comm_range_m
+from swarm.planning.relay import plan_relays, standable_grid
+
+#: Entry cells up to this much farther from the launch point than the nearest one may be chosen
+#: to shorten the way to the goal, metres.
+ENTRY_SLACK_M = 10.0
+#: Decimal places of every float written to plan.json (1 mm; 1 ms).
+ROUND = 3
+ROLES = ("landing", "search", "relay", "surveillance", "beacon", "spare")
+
+Progress = Callable[[int, int], None]
+
+
+@dataclass
+class RobotPlan:
+    id: str
+    role: str
+    task: str | None
+    launch_m: tuple[float, float]
+    release_s: float
+    sea_leg_m: np.ndarray  # (2, 2): launch point, entry
+    ground_m: np.ndarray  # (k, 2) OMPL path from the entry to the goal (empty for spares)
+    track_m: np.ndarray  # (t, 2) search tracks after the goal (searchers only)
+    eta_s: float
+    sea_time_s: float
+    ground_time_s: float
+    length_m: float
+
+    @property
+    def waypoints_m(self) -> np.ndarray:
+        parts = [
+            self.sea_leg_m[:1],
+            self.ground_m if len(self.ground_m) else self.sea_leg_m[1:],
+            self.track_m,
+        ]
+        return np.vstack([p.reshape(-1, 2) for p in parts])
+
+
+@dataclass
+class SearchPlan:
+    task: str
+    area: str
+    area_m: list
+    sweep_width_m: float
+    spacing_m: float
+    model: str
+    tracks: list[list[LineString]]  # per searcher
+    expected_detection: float
+    swath_coverage: float
+    area_m2: float
+
+
+@dataclass
+class RelayPlanOut:
+    task: str
+    source_m: np.ndarray
+    sinks_m: np.ndarray
+    comm_range_m: float
+    redundancy: int
+    positions_m: np.ndarray
+    edges: np.ndarray
+    hop_lengths_m: np.ndarray
+
+
+@dataclass
+class MissionPlan:
+    mission: str
+    map: str
+    seed: int
+    robots: list[RobotPlan]
+    search: list[SearchPlan]
+    relay: RelayPlanOut | None
+    costmap: CostMap = field(repr=False)
+    beach_map: object = field(repr=False)
+
+    @property
+    def expected_coverage(self) -> float | None:
+        """Area-weighted expected detection fraction over the search tasks (None without search)."""
+        if not self.search:
+            return None
+        total = sum(s.area_m2 for s in self.search)
+        return sum(s.expected_detection * s.area_m2 for s in self.search) / total
+
+    def summary(self) -> dict:
+        roles = {r: sum(1 for b in self.robots if b.role == r) for r in ROLES}
+        working = [b for b in self.robots if b.role != "spare"]
+        return {
+            "robots": len(self.robots),
+            "roles": {k: v for k, v in roles.items() if v},
+            "last_arrival_s": max((b.eta_s for b in working), default=0.0),
+            "first_arrival_s": min((b.eta_s for b in working), default=0.0),
+            "total_length_m": sum(b.length_m for b in self.robots),
+            "relays": 0 if self.relay is None else len(self.relay.positions_m),
+            "search_tracks_m": sum(sum(t.length for ts in s.tracks for t in ts) for s in self.search),
+            "expected_coverage": self.expected_coverage,
+        }
+
+    def as_dict(self) -> dict:
+        relay = None
+        if self.relay is not None:
+            r = self.relay
+            relay = {
+                "task": r.task,
+                "source_m": r.source_m.tolist(),
+                "sinks_m": r.sinks_m.tolist(),
+                "comm_range_m": r.comm_range_m,
+                "redundancy": r.redundancy,
+                "positions_m": r.positions_m.tolist(),
+                "edges": r.edges.tolist(),
+                "max_hop_m": float(r.hop_lengths_m.max()) if len(r.hop_lengths_m) else 0.0,
+            }
+        out = {
+            "mission": self.mission,
+            "map": self.map,
+            "seed": self.seed,
+            "robots": [
+                {
+                    "id": b.id,
+                    "role": b.role,
+                    "task": b.task,
+                    "launch_m": list(b.launch_m),
+                    "release_s": b.release_s,
+                    "sea_leg_m": b.sea_leg_m.tolist(),
+                    "ground_m": b.ground_m.tolist(),
+                    "waypoints_m": b.waypoints_m.tolist(),
+                    "eta_s": b.eta_s,
+                    "sea_time_s": b.sea_time_s,
+                    "ground_time_s": b.ground_time_s,
+                    "length_m": b.length_m,
+                }
+                for b in self.robots
+            ],
+            "search": [
+                {
+                    "task": s.task,
+                    "area": s.area,
+                    "area_m": s.area_m,
+                    "sweep_width_m": s.sweep_width_m,
+                    "spacing_m": s.spacing_m,
+                    "tracks_m": [[list(t.coords) for t in ts] for ts in s.tracks],
+                    "model": s.model,
+                    "expected_detection": s.expected_detection,
+                    "swath_coverage": s.swath_coverage,
+                }
+                for s in self.search
+            ],
+            "relay": relay,
+            "expected_coverage": self.expected_coverage,
+            "summary": self.summary(),
+        }
+        return _rounded(out)
+
+
+def _rounded(value):
+    if isinstance(value, float):
+        r = round(value, ROUND)
+        return 0.0 if r == 0 else r
+    if isinstance(value, dict):
+        return {k: _rounded(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [_rounded(v) for v in value]
+    if isinstance(value, np.floating):
+        return _rounded(float(value))
+    if isinstance(value, np.integer):
+        return int(value)
+    return value
+
+
+# --- geometry helpers ------------------------------------------------------------------------------
+
+
+def _place(beach_map, place) -> tuple[float, float]:
+    if isinstance(place, str):
+        geom = beach_map.regions[place].geometry
+        p = geom if geom.geom_type == "Point" else geom.representative_point()
+        return float(p.x), float(p.y)
+    return float(place[0]), float(place[1])
+
+
+class _Free:
+    """Free cells of the cost map, by connected region, with nearest-free-cell lookups."""
+
+    def __init__(self, cm: CostMap, water_classes: np.ndarray) -> None:
+        self.cm = cm
+        free = ~cm.blocked
+        _, (self.near_r, self.near_c) = ndimage.distance_transform_edt(~free, return_indices=True)
+        rows, cols = np.nonzero(free)
+        x, y = cm.center_of(rows, cols)
+        self.xy = np.column_stack([x, y])
+        self.comp = cm.component[rows, cols]
+        # the seaward edge: free cells within the footprint inflation (and a cell) of blocked water
+        water = cm.blocked & water_classes[cm.terrain.astype(np.intp)]
+        reach = math.ceil(cm.inflation_m / cm.cell_m) + 1
+        near_water = ndimage.binary_dilation(water, np.ones((3, 3), bool), iterations=reach)
+        self.edge = near_water[rows, cols]
+
+    def snap(self, xy: Sequence[float], component: int | None = None) -> np.ndarray:
+        """(x, y) if a robot may stand there (in `component`), else the nearest free cell centre."""
+        x, y = float(xy[0]), float(xy[1])
+        cm = self.cm
+        if bool(cm.is_free(x, y)):
+            r, c = (int(v) for v in cm.cell_of(x, y))
+            if component is None or cm.component[r, c] == component:
+                return np.array([x, y])
+        if component is None:
+            r, c = (int(v) for v in cm.cell_of(x, y))
+            r2, c2 = int(self.near_r[r, c]), int(self.near_c[r, c])
+            return np.array([float(v) for v in cm.center_of(r2, c2)])
+        pts = self.xy[self.comp == component]
+        return pts[int(np.argmin(np.hypot(pts[:, 0] - x, pts[:, 1] - y)))].copy()
+
+    def component_of(self, xy: np.ndarray) -> int:
+        r, c = (int(v) for v in self.cm.cell_of(xy[0], xy[1]))
+        return int(self.cm.component[r, c])
+
+    def entry(self, launch: np.ndarray, goal: np.ndarray, component: int) -> np.ndarray:
+        """The free cell of `component` where a robot swimming from `launch` comes ashore toward `goal`."""
+        if bool(self.cm.is_free(*launch)) and self.component_of(launch) == component:
+            return launch.copy()
+        here = self.comp == component
+        if (here & self.edge).any():
+            here &= self.edge
+        pts = self.xy[here]
+        d_launch = np.hypot(pts[:, 0] - launch[0], pts[:, 1] - launch[1])
+        near = d_launch <= d_launch.min() + ENTRY_SLACK_M
+        score = np.where(near, d_launch + np.hypot(pts[:, 0] - goal[0], pts[:, 1] - goal[1]), np.inf)
+        return pts[int(np.argmin(score))].copy()
+
+    def spread(self, polygon, k: int, start: np.ndarray) -> list[np.ndarray]:
+        """k free points inside `polygon`, far apart (farthest-point sampling from `start`)."""
+        inside = shapely.contains_xy(polygon, self.xy[:, 0], self.xy[:, 1])
+        pts = self.xy[inside]
+        if not len(pts):
+            return [self.snap(start) for _ in range(k)]
+        first = pts[int(np.argmin(np.hypot(*(pts - start).T)))]
+        chosen = [first]
+        dist = np.hypot(*(pts - first).T)
+        while len(chosen) < k:
+            nxt = pts[int(np.argmax(dist))]
+            chosen.append(nxt)
+            dist = np.minimum(dist, np.hypot(*(pts - nxt).T))
+        return [c.copy() for c in chosen]
+
+
+@dataclass
+class _Slot:
+    role: str
+    task: str
+    goal: np.ndarray
+    track: np.ndarray = field(default_factory=lambda: np.empty((0, 2)))
+
+
+def _radio_params(radio) -> RadioParams:
+    return RadioParams(
+        frequency_hz=radio.frequency_hz,
+        tx_power_dbm=radio.tx_power_dbm,
+        tx_gain_dbi=radio.tx_gain_dbi,
+        rx_gain_dbi=radio.rx_gain_dbi,
+        tx_height_m=radio.antenna_height_m,
+        rx_height_m=radio.antenna_height_m,
+        sensitivity_dbm=radio.rx_sensitivity_dbm,
+        fade_margin_db=radio.fade_margin_db,
+    )
+
+
+def _track_points(tracks: list[LineString]) -> np.ndarray:
+    if not tracks:
+        return np.empty((0, 2))
+    return np.vstack([np.asarray(t.coords) for t in tracks])
+
+
+# --- planning ---------------------------------------------------------------------------------------
+
+
+def _slots(mission: Mission, free: _Free) -> tuple[list[_Slot], list[SearchPlan], RelayPlanOut | None]:
+    bm = mission.beach_map
+    count = mission.swarm.count
+    slots: list[_Slot] = []
+    relay_out: RelayPlanOut | None = None
+    for t, task in enumerate(mission.tasks):
+        label = mission.task_label(t)
+        if task.type == "landing":
+            for zone in task.zones:
+                geom = bm.regions[zone].geometry
+                rep = np.array(_place(bm, zone))
+                for p in free.spread(geom, task.robots_per_zone, rep):
+                    slots.append(_Slot("landing", label, p))
+        elif task.type == "relay":
+            if relay_out is not None:
+                raise SwarmError(f"plan: {label}: one relay task per mission is supported")
+            radio = _radio_params(task.radio)
+            range_m = comm_range_m(radio)
+            source = np.array(_place(bm, task.source))
+            sinks = np.array([_place(bm, s) for s in task.sinks])
+            rp = plan_relays(
+                source,
+                sinks,
+                range_m=range_m,
+                grid=standable_grid(bm, mission.terrain_library),
+                redundancy=task.redundancy,
+            )
+            relay_out = RelayPlanOut(
+                label, source, sinks, range_m, task.redundancy, rp.positions_m, rp.edges, rp.hop_lengths_m
+            )
+            for p in rp.positions_m:
+                slots.append(_Slot("relay", label, free.snap(p)))
+        elif task.type in ("surveillance", "beacon"):
+            for point in task.points:
+                p = free.snap(_place(bm, point))
+                slots.extend(_Slot(task.type, label, p.copy()) for _ in range(task.robots_per_point))
+
+    searches = [(t, task) for t, task in enumerate(mission.tasks) if task.type == "search"]
+    left = count - len(slots)
+    fixed = sum(task.robots for _, task in searches if task.robots is not None)
+    open_tasks = [t for t, task in searches if task.robots is None]
+    share = max(0, left - fixed)
+    search_out: list[SearchPlan] = []
+    for t, task in searches:
+        label = mission.task_label(t)
+        if task.robots is not None:
+            n = task.robots
+        else:
+            i = open_tasks.index(t)
+            n = share // len(open_tasks) + (1 if i < share % len(open_tasks) else 0)
+        n = max(n, 1)
+        # robots never sweep inside a keep-out zone: search what is left of the area
+        keep_out = [r.geometry for r in bm.regions_of_kind("keep_out")]
+        polygon = bm.regions[task.area].geometry
+        if keep_out:
+            polygon = polygon.difference(shapely.union_all(keep_out))
+        tracks = boustrophedon(polygon, task.spacing_m)
+        runs = split_tracks(tracks, n)
+        runs = [r for r in runs if r]
+        model = "random" if task.sensor.model == "random_search" else task.sensor.model
+        width = task.sensor.width_m
+        length = sum(tr.length for tr in tracks)
+        expected = detection_probability(
+            model, width, spacing_m=task.spacing_m, track_length_m=length, area_m2=polygon.area
+        )
+        search_out.append(
+            SearchPlan(
+                task=label,
+                area=task.area,
+                area_m=_outline(polygon),
+                sweep_width_m=width,
+                spacing_m=task.spacing_m,
+                model=task.sensor.model,
+                tracks=runs,
+                expected_detection=expected,
+                swath_coverage=swath_coverage(polygon, tracks, width),
+                area_m2=polygon.area,
+            )
+        )
+        for run in runs:
+            pts = _track_points(run)
+            slots.append(_Slot("search", label, free.snap(pts[0]), pts))
+    return slots, search_out, relay_out
+
+
+def _outline(polygon) -> list:
+    """Exterior ring coordinates of a polygon, or a list of rings for a multipolygon."""
+    if polygon.geom_type == "Polygon":
+        return [list(c) for c in polygon.exterior.coords]
+    return [[list(c) for c in part.exterior.coords] for part in polygon.geoms]
+
+
+def _plan_routes(cm, pairs: np.ndarray, profile, seed: int, workers: int | None, progress: Progress | None):
+    """Every robot's ground route: `plan_many` with the mission's seed (per-pair seeds from it)."""
+    if len(pairs) == 0:
+        return []
+    return plan_many(cm, pairs, profile, seed=seed, workers=workers, progress=progress, label="robot route")
+
+
+def plan_mission(
+    mission: Mission,
+    *,
+    seed: int = 0,
+    progress: Progress | None = None,
+    workers: int | None = None,
+) -> MissionPlan:
+    """Allocate the mission's tasks to its robots and plan every route (module docstring).
+
+    `progress(done, total)` is called as ground routes finish. `workers`: planning processes
+    (default: the CPU count; 1 plans in this process). Raises `SwarmError` subclasses."""
+    bm = mission.beach_map
+    cm = build_costmap(bm, mission.robot_params, mission.terrain_library)
+    lib = mission.terrain_library
+    water = np.array([lib[c].is_water for c in bm.terrain_classes], dtype=bool)
+    free = _Free(cm, water)
+    if not len(free.xy):
+        raise SwarmError(f"plan: no ground on map '{bm.name}' a robot can drive on")
+    slots, searches, relay = _slots(mission, free)
+
+    points = mission.launch.points
+    if points is None:
+        launches = [_place(bm, r.name) for r in bm.regions_of_kind("launch")]
+    else:
+        launches = [_place(bm, p) for p in points]
+    n = mission.swarm.count
+    launch = np.array([launches[i % len(launches)] for i in range(n)])
+
+    if slots:
+        goals = np.array([s.goal for s in slots])
+        cost = np.hypot(launch[:, None, 0] - goals[None, :, 0], launch[:, None, 1] - goals[None, :, 1])
+        # ties (robots sharing a launch point): earlier robots take the nearer slots
+        cost = cost + np.arange(n)[:, None] * 1e-9 * np.arange(len(slots))[None, :]
+        who = assign(cost)
+    else:
+        who = np.full(n, -1)
+
+    # a spare waits at the entry nearest its launch point, on the largest ground region
+    sizes = np.bincount(free.comp)
+    main_comp = int(np.argmax(sizes))
+    entries, goal_pts, routed = [], [], []
+    for i in range(n):
+        if who[i] >= 0:
+            goal = slots[who[i]].goal
+            comp = free.component_of(goal)
+        else:
+            goal, comp = launch[i], main_comp
+        entry = free.entry(launch[i], goal, comp)
+        entries.append(entry)
+        goal_pts.append(goal)
+        if who[i] >= 0:
+            routed.append(i)
+    pairs = np.array([[entries[i], goal_pts[i]] for i in routed]).reshape(-1, 2, 2)
+    try:
+        results = _plan_routes(cm, pairs, mission.planner_profile, seed, workers, progress)
+    except PlanningError as exc:
+        raise SwarmError(f"plan: {mission.name}: {exc}") from None
+    by_robot = dict(zip(routed, results, strict=True))
+
+    swim = mission.robot.swim_speed_mps
+    offshore = mission.launch.release_offshore_m
+    interval = mission.launch.interval_s
+    robots: list[RobotPlan] = []
+    for i in range(n):
+        slot = slots[who[i]] if who[i] >= 0 else None
+        sea = np.array([launch[i], entries[i]])
+        sea_len = float(np.hypot(*(sea[1] - sea[0])))
+        sea_time = (offshore + sea_len) / swim
+        res = by_robot.get(i)
+        ground = res.waypoints_m if res is not None else np.empty((0, 2))
+        ground_time = res.time_s if res is not None else 0.0
+        track = slot.track[1:] if slot is not None and len(slot.track) else np.empty((0, 2))
+        if slot is not None and len(slot.track):
+            track = (
+                np.vstack([slot.track[:1], track]) if not np.allclose(ground[-1], slot.track[0]) else track
+            )
+        rp = RobotPlan(
+            id=f"robot_{i}",
+            role=slot.role if slot is not None else "spare",
+            task=slot.task if slot is not None else None,
+            launch_m=(float(launch[i, 0]), float(launch[i, 1])),
+            release_s=i * interval,
+            sea_leg_m=sea,
+            ground_m=ground,
+            track_m=track,
+            eta_s=i * interval + sea_time + ground_time,
+            sea_time_s=sea_time,
+            ground_time_s=ground_time,
+            length_m=0.0,
+        )
+        wp = rp.waypoints_m
+        rp.length_m = offshore + float(np.hypot(*np.diff(wp, axis=0).T).sum()) if len(wp) > 1 else offshore
+        robots.append(rp)
+    name = mission.name or "mission"
+    return MissionPlan(name, bm.name, seed, robots, searches, relay, cm, bm)
+
+
+# --- output -------------------------------------------------------------------------------------------
+
+
+def plan_json(plan: MissionPlan) -> str:
+    return json.dumps(plan.as_dict(), sort_keys=True, indent=1) + "\n"
+
+
+def plan_geojson(plan: MissionPlan) -> dict:
+    from swarm.world.io import regions_to_geojson
+
+    features = []
+    for f in regions_to_geojson(plan.beach_map)["features"]:
+        features.append({**f, "properties": {**f["properties"], "layer": "region"}})
+    for b in plan.robots:
+        wp = b.waypoints_m
+        if len(wp) < 2:
+            continue
+        features.append(
+            {
+                "type": "Feature",
+                "geometry": {"type": "LineString", "coordinates": wp.tolist()},
+                "properties": {
+                    "layer": "route",
+                    "id": b.id,
+                    "role": b.role,
+                    "task": b.task,
+                    "eta_s": b.eta_s,
+                },
+            }
+        )
+    for s in plan.search:
+        for k, run in enumerate(s.tracks):
+            features.append(
+                {
+                    "type": "Feature",
+                    "geometry": {"type": "MultiLineString", "coordinates": [list(t.coords) for t in run]},
+                    "properties": {"layer": "search_tracks", "task": s.task, "searcher": k},
+                }
+            )
+    if plan.relay is not None:
+        r = plan.relay
+        nodes = np.vstack([r.source_m[None, :], r.sinks_m, r.positions_m.reshape(-1, 2)])
+        for a, b in r.edges:
+            features.append(
+                {
+                    "type": "Feature",
+                    "geometry": {"type": "LineString", "coordinates": [nodes[a].tolist(), nodes[b].tolist()]},
+                    "properties": {"layer": "relay_link", "task": r.task, "nodes": [int(a), int(b)]},
+                }
+            )
+    return _rounded({"type": "FeatureCollection", "name": plan.mission, "features": features})
+
+
+def write_plan(plan: MissionPlan, out_dir: str | Path) -> dict[str, Path]:
+    """Write plan.json and plan.geojson into `out_dir` (created), atomically; returns the paths."""
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    paths = {"plan.json": out / "plan.json", "plan.geojson": out / "plan.geojson"}
+    write_text_atomic(paths["plan.json"], plan_json(plan))
+    write_text_atomic(paths["plan.geojson"], json.dumps(plan_geojson(plan), sort_keys=True) + "\n")
+    return paths
+
+
+__all__ = ["MissionPlan", "RobotPlan", "plan_geojson", "plan_json", "plan_mission", "write_plan"]

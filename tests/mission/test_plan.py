@@ -1,0 +1,177 @@
+"""Mission plans: reproducible files, every robot routed, ground routes valid on the cost map,
+relay hops within radio range, search tracks shared, and the `swarm plan` command."""
+
+from __future__ import annotations
+
+import itertools
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy.spatial import cKDTree
+
+from swarm.cli import main
+from swarm.mission import load_mission, mission_from_dict
+from swarm.mission.plan import ROLES, plan_json, plan_mission, write_plan
+from swarm.planning.costmap import FREE
+
+REPO = Path(__file__).resolve().parents[2]
+LANDING = REPO / "missions" / "landing.yaml"
+
+
+def _small_mixed():
+    """landing + relay (short radio range: relays needed) + beacon + search, on test_small."""
+    raw = {
+        "name": "small_mixed",
+        "map": "../maps/test_small.yaml",
+        "planner": "../planners/fast.yaml",
+        "swarm": {"count": 9},
+        "launch": {"platform": "by_hand", "points": ["launch_1", "launch_2"], "offshore_m": 50},
+        "tasks": [
+            {"type": "landing", "zones": ["landing_a"], "robots_per_zone": 1},
+            {
+                "type": "relay",
+                "source": "relay_source",
+                "sinks": ["relay_sink"],
+                "radio": {"tx_power_dbm": -10.0},
+            },
+            {"type": "beacon", "points": [[60.0, 50.0]]},
+            {"type": "search", "area": "search_beach", "sensor": {"sweep_width_m": 4.0}, "robots": 2},
+        ],
+    }
+    return mission_from_dict(raw, REPO / "missions" / "small_mixed.yaml")
+
+
+@pytest.fixture(scope="module")
+def landing_plan():
+    return plan_mission(load_mission(LANDING), seed=3, workers=1)
+
+
+@pytest.fixture(scope="module")
+def mixed_plan():
+    return plan_mission(_small_mixed(), seed=1, workers=1)
+
+
+def test_same_seed_same_bytes(tmp_path, landing_plan):
+    again = plan_mission(load_mission(LANDING), seed=3, workers=1)
+    a = write_plan(landing_plan, tmp_path / "a")
+    b = write_plan(again, tmp_path / "b")
+    for name in ("plan.json", "plan.geojson"):
+        assert a[name].read_bytes() == b[name].read_bytes()
+    data = json.loads(a["plan.json"].read_text())
+    assert data["seed"] == 3 and data["mission"] == "landing" and data["map"] == "test_small"
+
+
+def test_every_robot_has_a_route(landing_plan):
+    data = json.loads(plan_json(landing_plan))
+    assert len(data["robots"]) == 12
+    for r in data["robots"]:
+        for key in ("id", "role", "task", "launch_m", "waypoints_m", "eta_s", "length_m"):
+            assert key in r
+        assert r["role"] in ROLES
+        assert r["waypoints_m"][0] == r["launch_m"]
+        assert r["eta_s"] > 0
+    roles = [r["role"] for r in data["robots"]]
+    assert roles.count("landing") == 8 and roles.count("spare") == 4
+    # four robots end inside each landing zone
+    bm = landing_plan.beach_map
+    for zone in ("landing_a", "landing_b"):
+        geom = bm.regions[zone].geometry
+        ends = [b.ground_m[-1] for b in landing_plan.robots if b.role == "landing"]
+        assert sum(geom.buffer(1.0).contains(_pt(e)) for e in ends) == 4
+
+
+def _pt(xy):
+    from shapely.geometry import Point
+
+    return Point(float(xy[0]), float(xy[1]))
+
+
+def test_eta_adds_release_swim_and_drive(landing_plan):
+    m = load_mission(LANDING)
+    for i, b in enumerate(landing_plan.robots):
+        swim = (m.launch.release_offshore_m + np.hypot(*(b.sea_leg_m[1] - b.sea_leg_m[0]))) / 0.5
+        assert b.eta_s == pytest.approx(i * m.launch.interval_s + swim + b.ground_time_s)
+
+
+def footprint_clearance(cm, waypoints: np.ndarray, step_m: float = 0.01) -> float:
+    """Least distance from points 1 cm apart along the route to an impassable cell (as a square)."""
+    pts = [waypoints[:1]]
+    for a, b in itertools.pairwise(waypoints):
+        n = max(2, math.ceil(np.hypot(*(b - a)) / step_m) + 1)
+        pts.append(a + np.linspace(0.0, 1.0, n)[1:, None] * (b - a))
+    pts = np.vstack(pts)
+    rows, cols = np.nonzero(cm.reason != FREE)
+    centres = np.column_stack(
+        [cm.origin_m[0] + (cols + 0.5) * cm.cell_m, cm.origin_m[1] + (rows + 0.5) * cm.cell_m]
+    )
+    _, idx = cKDTree(centres).query(pts, k=min(16, len(centres)))
+    d = np.maximum(np.abs(pts[:, None, :] - centres[idx]) - cm.cell_m / 2, 0.0)
+    return float(np.hypot(d[..., 0], d[..., 1]).min())
+
+
+@pytest.mark.parametrize("which", ["landing_plan", "mixed_plan"])
+def test_ground_routes_valid_on_costmap(which, request):
+    plan = request.getfixturevalue(which)
+    cm = plan.costmap
+    for b in plan.robots:
+        if b.role == "spare":
+            assert len(b.ground_m) == 0
+            continue
+        g = b.ground_m
+        assert np.allclose(g[0], b.sea_leg_m[1])
+        assert cm.is_free(g[:, 0], g[:, 1]).all(), b.id
+        # the planner's guarantee: every point of the route keeps the footprint's half-width from
+        # impassable ground (the blocked grid adds half the validity resolution on top)
+        assert footprint_clearance(cm, g) >= cm.half_width_m - 1e-9, b.id
+
+
+def test_relay_hops_within_range(mixed_plan):
+    data = json.loads(plan_json(mixed_plan))
+    relay = data["relay"]
+    assert relay["comm_range_m"] < 60.0
+    assert len(relay["positions_m"]) >= 1
+    nodes = np.array([relay["source_m"], *relay["sinks_m"], *relay["positions_m"]])
+    for a, b in relay["edges"]:
+        assert np.hypot(*(nodes[a] - nodes[b])) <= relay["comm_range_m"] + 1e-6
+    relays = [r for r in data["robots"] if r["role"] == "relay"]
+    assert len(relays) == len(relay["positions_m"])
+
+
+def test_search_tracks_shared(mixed_plan):
+    data = json.loads(plan_json(mixed_plan))
+    (search,) = data["search"]
+    assert len(search["tracks_m"]) == 2
+    # inverse cube, W = S: erf(sqrt(pi) / 2)
+    assert search["expected_detection"] == pytest.approx(math.erf(math.sqrt(math.pi) / 2.0), abs=1e-3)
+    assert search["swath_coverage"] > 0.9
+    searchers = [r for r in data["robots"] if r["role"] == "search"]
+    assert len(searchers) == 2
+    starts = {tuple(run[0][0]) for run in search["tracks_m"]}
+    for r in searchers:
+        # after its ground route, a searcher follows its tracks
+        assert any(tuple(p) in starts for p in r["waypoints_m"])
+    assert data["expected_coverage"] == search["expected_detection"]
+
+
+def test_cli_writes_files(tmp_path, capsys):
+    out = tmp_path / "out"
+    assert main(["plan", str(LANDING), "--seed", "2", "--out", str(out), "--workers", "1"]) == 0
+    for name in ("plan.json", "plan.geojson", "report.md", "report.html"):
+        assert (out / name).is_file(), name
+    html = (out / "report.html").read_text()
+    assert "data:image/png;base64," in html and "robot_0" in html
+    geo = json.loads((out / "plan.geojson").read_text())
+    layers = {f["properties"].get("layer") for f in geo["features"]}
+    assert {"route", "region"} <= layers
+    printed = capsys.readouterr().out
+    assert "landing" in printed and str(out) in printed
+
+
+def test_cli_bad_mission_exits_2(tmp_path, capsys):
+    assert main(["plan", str(tmp_path / "nope.yaml"), "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith("swarm: error:")
+    assert not (tmp_path / "o").exists()
