@@ -105,6 +105,14 @@ def _add_map_commands(commands) -> None:
     generate.add_argument("--d50-mm", type=float, help="median sand grain size (mm)")
     generate.add_argument("--breaker-height-m", type=float, help="breaking wave height (m)")
     generate.add_argument("--cell-m", type=float, help="grid cell size (m)")
+    generate.add_argument("--wave-period-s", type=float, help="swell period (s), for the run-up (default 8)")
+    generate.add_argument(
+        "--tide-range-m", type=float, help="tidal range (m) widening the wet band (default 1)"
+    )
+    generate.add_argument(
+        "--rock-outcrops", type=float, help="rock outcrops ringed by boulders, 0..1 (default 0)"
+    )
+    generate.add_argument("--river-mouth", action="store_true", help="a river through the dunes into the sea")
     generate.add_argument("--name", help="map name (default: the output file's stem)")
     generate.add_argument(
         "-o", "--out", required=True, type=Path, metavar="maps/NAME.yaml", help="map YAML to write (+ .npz)"
@@ -396,12 +404,24 @@ def _cmd_map_generate(args: argparse.Namespace) -> int:
     for key, value in given.items():
         if value is not None and not (value > 0 and value < float("inf")):
             raise InputError("command line", "--" + key.replace("_", "-"), value, "a positive number")
+    if args.wave_period_s is not None and not 0 < args.wave_period_s < float("inf"):
+        raise InputError("command line", "--wave-period-s", args.wave_period_s, "a positive number")
+    for key in ("tide_range_m", "rock_outcrops"):
+        value = getattr(args, key)
+        if value is not None and not 0 <= value < float("inf"):
+            raise InputError("command line", "--" + key.replace("_", "-"), value, "a number >= 0")
     if args.seed is not None and args.seed < 0:
         raise InputError("command line", "--seed", args.seed, "a non-negative integer")
     from swarm.world.generate import generate_beach
     from swarm.world.io import save_map
 
-    options = {k: v for k, v in {"seed": args.seed, **given}.items() if v is not None}
+    extra = {
+        "wave_period_s": args.wave_period_s,
+        "tide_range_m": args.tide_range_m,
+        "rock_outcrops": args.rock_outcrops,
+        "river_mouth": True if args.river_mouth else None,
+    }
+    options = {k: v for k, v in {"seed": args.seed, **given, **extra}.items() if v is not None}
     beach_map = generate_beach(name=_map_name(args), **options)
     save_map(beach_map, args.out)
     rows, cols = beach_map.shape

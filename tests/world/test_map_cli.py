@@ -377,3 +377,17 @@ def test_bad_input_is_one_line_and_exit_2(tmp_path, map_file, case):
     assert needle in result.stderr
     assert result.stdout == ""
     assert sorted(p.name for p in tmp_path.iterdir()) == before
+
+
+def test_generate_cli_reproduces_the_shipped_river_map(tmp_path):
+    """Every shipped map comes from `swarm map generate`: the river map's flags give its grid
+    bit for bit (the recipe in maps/README.md)."""
+    args = ["map", "generate", "--seed", "7", "--length-m", "600", "--width-m", "250", "--cell-m", "1"]
+    args += ["--d50-mm", "1.5", "--breaker-height-m", "1.5", "--wave-period-s", "10", "--river-mouth"]
+    args += ["--rock-outcrops", "1.0", "--name", "steep_coarse_river", "-o", str(tmp_path / "s.yaml")]
+    assert main(args) == 0
+    repo = Path(__file__).resolve().parents[2]
+    made, shipped = load_map(tmp_path / "s.yaml"), load_map(repo / "maps" / "steep_coarse_river.yaml")
+    assert np.array_equal(made.terrain, shipped.terrain)
+    assert np.array_equal(made.elevation_m, shipped.elevation_m)
+    assert main(["map", "generate", "--rock-outcrops", "-1", "-o", str(tmp_path / "t.yaml")]) == 2
