@@ -150,17 +150,18 @@ FIGURE_SUFFIXES = (".png", ".svg", ".pdf")
 
 
 def _choose_mode(args: argparse.Namespace):
-    from swarm.robot.terrain import library_from_dict, load_library
+    from swarm.files import read_yaml
+    from swarm.robot.terrain import default_library, library_from_dict
 
-    library = load_library(args.terrain)
+    library = default_library()
     name = args.mode
-    if name is None and args.terrain is not None:
-        import yaml
-
-        own = library_from_dict(yaml.safe_load(args.terrain.read_text()), args.terrain, library)
-        name = next(iter(own)) if len(own) == 1 else None
+    if args.terrain is not None:
+        own = library_from_dict(read_yaml(args.terrain, "terrain YAML file"), args.terrain, library)
+        library = library.merged(own)
         if name is None:
-            raise InputError(args.terrain, "modes", sorted(own), "one mode, or --mode NAME to choose")
+            if len(own) != 1:
+                raise InputError(args.terrain, "modes", sorted(own), "one mode, or --mode NAME to choose")
+            name = next(iter(own))
     name = name or "concrete"
     if name not in library:
         raise InputError(args.terrain or "--mode", "--mode", name, f"one of {sorted(library)}")

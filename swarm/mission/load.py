@@ -38,6 +38,7 @@ import yaml
 from pydantic import BaseModel, ValidationError
 
 from swarm.errors import InputError
+from swarm.files import parse_yaml, read_text
 from swarm.mission.schema import (
     TASK_CLASSES,
     Mission,
@@ -84,19 +85,11 @@ _Loader.add_implicit_resolver(
 def read_mission_yaml(path: str | Path) -> dict:
     """The mission file's YAML as a mapping (not yet validated)."""
     path = Path(path)
+    text = read_text(path, "mission YAML file")
     try:
-        text = path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        found = exc.strerror if isinstance(exc, OSError) else "bytes that are not UTF-8 text"
-        raise InputError(path, "(file)", found, "a readable mission YAML file") from None
-    try:
-        data = yaml.load(text, Loader=_Loader)
+        data = parse_yaml(text, path, loader=_Loader)
     except _DuplicateKey as exc:
         raise InputError(path, f"line {exc.line}", exc.key, "each key once in a mapping") from None
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f"line {mark.line + 1}" if mark else "(file)"
-        raise InputError(path, where, getattr(exc, "problem", None) or "invalid YAML", "YAML") from None
     if not isinstance(data, dict):
         found = "an empty file" if data is None else type(data).__name__
         raise InputError(path, "(top level)", found, "a mapping of mission keys (map, swarm, tasks, ...)")

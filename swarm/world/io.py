@@ -49,7 +49,7 @@ from shapely.geometry.base import BaseGeometry
 from shapely.validation import explain_validity
 
 from swarm.errors import InputError
-from swarm.files import atomic_path, parse_yaml, write_text_atomic
+from swarm.files import atomic_path, parse_yaml, read_text, write_text_atomic
 from swarm.robot.terrain import TerrainLibrary, load_library
 from swarm.world.beachmap import REGION_KINDS, BeachMap, Region
 
@@ -77,14 +77,6 @@ def _xy_list(source: str | Path, where: str, value: object, at_least: int, what:
     if not isinstance(value, list | tuple) or len(value) < at_least:
         raise InputError(source, where, value, f"a list of at least {at_least} [x, y] pairs ({what})")
     return [_xy(source, f"{where}[{i}]", v) for i, v in enumerate(value)]
-
-
-def _read_text(path: Path, what: str) -> str:
-    try:
-        return path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        found = exc.strerror if isinstance(exc, OSError) else "bytes that are not UTF-8 text"
-        raise InputError(path, "(file)", found, f"a readable {what}") from None
 
 
 def _check_properties(source: str | Path, where: str, value: object) -> dict:
@@ -232,7 +224,7 @@ def regions_from_geojson(
 
 
 def _read_json(path: Path) -> object:
-    text = _read_text(path, "GeoJSON file")
+    text = read_text(path, "GeoJSON file")
     try:
         return json.loads(text)
     except json.JSONDecodeError as exc:
@@ -251,7 +243,7 @@ def load_geojson_regions(
 
 
 def _read_yaml(path: Path) -> object:
-    return parse_yaml(_read_text(path, "map YAML file"), path)
+    return parse_yaml(read_text(path, "map YAML file"), path)
 
 
 def _load_grid(path: Path, source: Path) -> tuple[np.ndarray, np.ndarray]:
@@ -525,7 +517,7 @@ def read_esri_ascii(
     path = Path(path)
     if fill is not None and not _is_number(fill):
         raise InputError(path, "fill", fill, "a finite elevation (m) for NODATA cells")
-    lines = _read_text(path, "ESRI ASCII grid").splitlines()
+    lines = read_text(path, "ESRI ASCII grid").splitlines()
     header: dict[str, tuple[float, int]] = {}
     first_data = len(lines)
     for i, line in enumerate(lines):
