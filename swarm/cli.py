@@ -75,6 +75,7 @@ def _parser() -> argparse.ArgumentParser:
     _add_map_commands(commands)
     _add_path_command(commands)
     _add_plan_command(commands)
+    _add_simulate_command(commands)
     schema = commands.add_parser("schema", help="print the mission file JSON Schema (for editors)")
     schema.set_defaults(handler=_cmd_schema)
     return parser
@@ -538,6 +539,136 @@ def _cmd_plan(args: argparse.Namespace) -> int:
     for key, value in rows:
         print(f"  {key.ljust(width)}  {value}")
     print(f"wrote {', '.join(p.name for p in paths.values())} in {out}")
+    return 0
+
+
+# --- swarm simulate: one mission run (swarm/sim) --------------------------------------------------------
+def _add_simulate_command(commands) -> None:
+    """`swarm simulate MISSION.yaml [--seed N] [--out DIR] [--animate FILE] [--set KEY=VALUE ...]`."""
+    sim = commands.add_parser(
+        "simulate", help="plan a mission and run it once in the simulator; write the log and a report"
+    )
+    sim.add_argument("mission", type=Path, metavar="MISSION.yaml")
+    sim.add_argument(
+        "--seed",
+        type=int,
+        help="random seed for the plan and the run (default: the mission's seed): same seed, same log",
+    )
+    sim.add_argument(
+        "--out",
+        type=Path,
+        metavar="DIR",
+        help="output folder (default: reports/<mission>-sim-<YYYYmmdd-HHMMSS>/)",
+    )
+    sim.add_argument(
+        "--animate",
+        type=Path,
+        metavar="FILE.gif|FILE.mp4",
+        help="also write an animation (.mp4 needs ffmpeg)",
+    )
+    sim.add_argument(
+        "--set",
+        dest="overrides",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="override a mission key by its dotted path, e.g. --set swarm.count=20 (repeatable)",
+    )
+    sim.add_argument("--workers", type=int, help="planning processes (default: the CPU count)")
+    sim.set_defaults(handler=_cmd_simulate)
+
+
+def _overrides(pairs: Sequence[str]) -> dict[str, object]:
+    """--set KEY=VALUE pairs; values are read as YAML scalars (20, 1.5, true, [1, 2], text)."""
+    from swarm.files import parse_yaml
+
+    out: dict[str, object] = {}
+    for pair in pairs:
+        key, sep, text = pair.partition("=")
+        if not sep or not key.strip():
+            raise InputError(
+                "command line", "--set", pair, "KEY=VALUE with a dotted key, e.g. swarm.count=20"
+            )
+        out[key.strip()] = parse_yaml(text, f"--set {key.strip()}")
+    return out
+
+
+def _cmd_simulate(args: argparse.Namespace) -> int:
+    import time
+
+    from tqdm import tqdm
+
+    from swarm.mission import load_mission
+    from swarm.mission.plan import plan_mission, write_plan
+    from swarm.report.sim_report import criteria_rows, end_state_rows, loss_rows, verdict, write_sim_report
+    from swarm.sim.render import Animator, check_animation_path
+    from swarm.sim.run import simulate, write_log
+
+    if args.seed is not None and args.seed < 0:
+        raise InputError("command line", "--seed", args.seed, "a seed >= 0")
+    if args.workers is not None and args.workers < 1:
+        raise InputError("command line", "--workers", args.workers, "at least 1")
+    if args.animate is not None:
+        check_animation_path(args.animate, will_create=args.out)
+    if args.out is not None and args.out.exists() and not args.out.is_dir():
+        raise InputError("command line", "--out", str(args.out), "a folder (this is a file)")
+    overrides = _overrides(args.overrides)
+    if not args.mission.is_file():
+        raise InputError("command line", "MISSION.yaml", str(args.mission), "an existing mission YAML file")
+    mission = load_mission(args.mission, overrides, overrides_source="--set")
+    out = args.out or Path("reports") / f"{mission.name}-sim-{time.strftime('%Y%m%d-%H%M%S')}"
+    if out.exists() and not out.is_dir():
+        raise InputError("command line", "--out", str(out), "a folder (this is a file)")
+    seed = mission.seed if args.seed is None else args.seed
+
+    with tqdm(desc="planning routes", unit="route", file=sys.stderr, leave=False) as bar:
+
+        def plan_progress(done: int, total: int) -> None:
+            bar.total = total
+            bar.n = done
+            bar.refresh()
+
+        plan = plan_mission(mission, seed=seed, progress=plan_progress, workers=args.workers)
+
+    with tqdm(desc="simulating", unit="s", file=sys.stderr, leave=False) as bar:
+
+        def sim_progress(t_s: float, limit_s: float) -> None:
+            if bar.total is None:
+                bar.total = round(limit_s)
+            bar.update(round(t_s) - bar.n)
+
+        if args.animate is None:
+            log = simulate(mission, seed, plan=plan, progress=sim_progress)
+        else:
+            args.animate.parent.mkdir(parents=True, exist_ok=True)  # may be the output folder
+            with Animator(args.animate) as anim:
+                log = simulate(mission, seed, plan=plan, progress=sim_progress, on_step=anim.on_step)
+
+    paths = {**write_plan(plan, out), **write_log(log, out), **write_sim_report(log, out)}
+    s = log.summary()
+    print(
+        f"simulated {log.mission} on {log.map}, seed {log.seed}: {s['robots']} robots, "
+        f"{s['duration_s']:.0f} s of mission time"
+    )
+    print()
+    print(_table([r[:1] + r[2:] for r in criteria_rows(log.outcome)]))
+    print()
+    if log.losses:
+        print(_table(loss_rows(log)))
+    else:
+        print("no robots lost")
+    print()
+    print(_table(end_state_rows(log)))
+    if s["mines"] or s["false_alarms"]:
+        print(
+            f"mines: {s['mines_detected']} of {s['mines']} detected, {s['mines_cleared']} cleared, "
+            f"{s['false_alarms']} false alarms"
+        )
+    print()
+    print(verdict(log.outcome))
+    print(f"wrote {', '.join(sorted(p.name for p in paths.values()))} in {out}")
+    if args.animate is not None:
+        print(f"animation: {args.animate} ({anim.frames} frames at {anim.fps:g} fps)")
     return 0
 
 

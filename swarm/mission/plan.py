@@ -218,7 +218,8 @@ def _rounded(value):
 # --- geometry helpers ------------------------------------------------------------------------------
 
 
-def _place(beach_map, place) -> tuple[float, float]:
+def place_xy(beach_map, place) -> tuple[float, float]:
+    """A mission `Place`: a region's point (a point region itself, else a point inside it) or [x, y]."""
     if isinstance(place, str):
         geom = beach_map.regions[place].geometry
         p = geom if geom.geom_type == "Point" else geom.representative_point()
@@ -299,8 +300,11 @@ class _Slot:
     track: np.ndarray = field(default_factory=lambda: np.empty((0, 2)))
 
 
-def _radio_params(radio) -> RadioParams:
+def radio_params(radio, shadowing_sigma_db: float | None = None) -> RadioParams:
+    """The planner's and simulator's radio model for a mission's `Radio` section."""
+    extra = {} if shadowing_sigma_db is None else {"shadowing_sigma_db": shadowing_sigma_db}
     return RadioParams(
+        **extra,
         frequency_hz=radio.frequency_hz,
         tx_power_dbm=radio.tx_power_dbm,
         tx_gain_dbi=radio.tx_gain_dbi,
@@ -331,16 +335,16 @@ def _slots(mission: Mission, free: _Free) -> tuple[list[_Slot], list[SearchPlan]
         if task.type == "landing":
             for zone in task.zones:
                 geom = bm.regions[zone].geometry
-                rep = np.array(_place(bm, zone))
+                rep = np.array(place_xy(bm, zone))
                 for p in free.spread(geom, task.robots_per_zone, rep):
                     slots.append(_Slot("landing", label, p))
         elif task.type == "relay":
             if relay_out is not None:
                 raise SwarmError(f"plan: {label}: one relay task per mission is supported")
-            radio = _radio_params(task.radio)
+            radio = radio_params(task.radio)
             range_m = comm_range_m(radio)
-            source = np.array(_place(bm, task.source))
-            sinks = np.array([_place(bm, s) for s in task.sinks])
+            source = np.array(place_xy(bm, task.source))
+            sinks = np.array([place_xy(bm, s) for s in task.sinks])
             rp = plan_relays(
                 source,
                 sinks,
@@ -355,7 +359,7 @@ def _slots(mission: Mission, free: _Free) -> tuple[list[_Slot], list[SearchPlan]
                 slots.append(_Slot("relay", label, free.snap(p)))
         elif task.type in ("surveillance", "beacon"):
             for point in task.points:
-                p = free.snap(_place(bm, point))
+                p = free.snap(place_xy(bm, point))
                 slots.extend(_Slot(task.type, label, p.copy()) for _ in range(task.robots_per_point))
 
     searches = [(t, task) for t, task in enumerate(mission.tasks) if task.type == "search"]
@@ -442,9 +446,9 @@ def plan_mission(
 
     points = mission.launch.points
     if points is None:
-        launches = [_place(bm, r.name) for r in bm.regions_of_kind("launch")]
+        launches = [place_xy(bm, r.name) for r in bm.regions_of_kind("launch")]
     else:
-        launches = [_place(bm, p) for p in points]
+        launches = [place_xy(bm, p) for p in points]
     n = mission.swarm.count
     launch = np.array([launches[i % len(launches)] for i in range(n)])
 

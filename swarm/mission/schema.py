@@ -133,6 +133,13 @@ class RobotSpec(_Model):
         description="Speed through open water (jet drive or wheel paddling), m/s, for the sea transit "
         "from the release point to the map. Default 0.5 (about 1 knot; assumed).",
     )
+    jet_thrust_n: float | None = Field(
+        None,
+        gt=0.0,
+        le=1000.0,
+        description="Largest water-jet thrust, newtons. Default: the thrust that holds 1.5 x swim_speed_mps "
+        "against the hull's deep-water drag (margin for currents and surges).",
+    )
 
 
 class SwarmSpec(_Model):
@@ -325,6 +332,14 @@ class Sensor(_Model):
     )
     lateral_range: LateralRange | None = Field(
         None, description="A tabulated lateral-range curve instead of sweep_width_m."
+    )
+
+    false_alarms_per_km: float = Field(
+        0.0,
+        ge=0.0,
+        le=1000.0,
+        description="False alarms per kilometre of track searched (clutter, debris): each is marked like a "
+        "mine. Default 0.",
     )
 
     @model_validator(mode="after")
@@ -538,6 +553,32 @@ class SurfHazard(_Model):
     damage_spread_m: float = Field(
         0.4, gt=0.0, description="Width of the logistic damage curve, metres. Default 0.4 (assumed)."
     )
+    wave_angle_deg: float = Field(
+        5.0,
+        ge=-60.0,
+        le=60.0,
+        description="Angle between the breaking wave crests and the shoreline, degrees (positive drives "
+        "the longshore current toward +x). Default 5.",
+    )
+    longshore_current_mps: float | None = Field(
+        None,
+        ge=-5.0,
+        le=5.0,
+        description="Longshore current in the surf zone, m/s along +x. Default: Longuet-Higgins (1970), "
+        "V = 1.17 sqrt(g H) sin(a) cos(a) from wave_height_m and wave_angle_deg.",
+    )
+    flip_probability: Fraction = Field(
+        0.2,
+        description="Chance one breaker impact turns a robot over; it works inverted (thesis 1.2). "
+        "Default 0.2 (assumed).",
+    )
+
+    def longshore_current(self) -> float:
+        """The surf zone's longshore current, m/s along +x (given, or Longuet-Higgins 1970)."""
+        if self.longshore_current_mps is not None:
+            return self.longshore_current_mps
+        a = math.radians(self.wave_angle_deg)
+        return 1.17 * math.sqrt(9.80665 * self.wave_height_m) * math.sin(a) * math.cos(a)
 
     def impact_damage_probability(self) -> float:
         """Probability one breaker impact disables a robot."""
@@ -573,6 +614,11 @@ class Rocks(_Model):
         0.0,
         ge=0.0,
         description="Unmapped rocks that stop a robot, per hectare of beach. Default 0 (only the map's).",
+    )
+    collision_damage_probability: Fraction = Field(
+        0.2,
+        description="Chance that running into a boulder (a mapped one, or a hidden rock) disables the "
+        "robot; otherwise it stops against it. Default 0.2 (assumed).",
     )
 
 
@@ -625,7 +671,28 @@ class Comms(_Model):
         description="Mission time at which all radio links are cut (jamming), seconds. Default: never.",
     )
     dropout_per_h: float = Field(
-        0.0, ge=0.0, description="Rate of single robots losing their radio, per hour. Default 0."
+        0.0,
+        ge=0.0,
+        description="Rate of single robots losing their radio for good, per hour: such a robot is alive "
+        "but cut off, and counted lost. Default 0.",
+    )
+    isolation_limit_s: float | None = Field(
+        None,
+        gt=0.0,
+        description="A robot with no radio link to any other robot or the source for this long is counted "
+        "lost, cut off from the network, seconds. Default: never.",
+    )
+    shadowing_sigma_db: float = Field(
+        6.0,
+        ge=0.0,
+        le=20.0,
+        description="Log-normal shadowing of every link, dB (standard deviation). Default 6 (open ground).",
+    )
+    decorrelation_m: float = Field(
+        20.0,
+        gt=0.0,
+        description="Distance over which a link's shadowing decorrelates as its ends move, metres "
+        "(Gudmundson 1991). Default 20.",
     )
 
 

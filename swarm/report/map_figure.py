@@ -17,13 +17,7 @@ from shapely.geometry.base import BaseGeometry
 from shapely.plotting import patch_from_polygon
 
 from swarm.files import atomic_path
-from swarm.report.style import (
-    REGION_STYLES,
-    ROUTE_COLOURS,
-    TERRAIN_COLOURS,
-    TERRAIN_FALLBACK,
-    new_figure,
-)
+from swarm.report.style import REGION_STYLES, ROUTE_COLOURS, new_figure, terrain_colours
 from swarm.world.beachmap import BeachMap
 
 MAX_WIDTH_IN = 14.0
@@ -31,14 +25,6 @@ MAX_MAP_HEIGHT_IN = 9.0
 LABEL_GAP_IN = 1.0
 _HALO = [pe.withStroke(linewidth=3.0, foreground="white", alpha=0.85)]
 _TEXT_HALO = [pe.withStroke(linewidth=2.2, foreground="white", alpha=0.9)]
-
-
-def terrain_colours(classes: Sequence[str]) -> list[str]:
-    """One colour per class, from the project palette (fallback colours for unknown modes)."""
-    out, spare = [], iter(TERRAIN_FALLBACK * (1 + len(classes) // len(TERRAIN_FALLBACK)))
-    for name in classes:
-        out.append(TERRAIN_COLOURS.get(name) or next(spare))
-    return out
 
 
 def figure_size(width_m: float, height_m: float, legend_rows: int) -> tuple[float, float]:

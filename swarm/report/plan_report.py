@@ -4,7 +4,6 @@ and the same tables)."""
 
 from __future__ import annotations
 
-import base64
 import html
 import io
 from pathlib import Path
@@ -14,18 +13,9 @@ from matplotlib.lines import Line2D
 
 from swarm.files import write_text_atomic
 from swarm.mission.plan import MissionPlan
+from swarm.report.html_page import html_figure, html_page, html_table, md_table
 from swarm.report.map_figure import figure_size, plot_map
-from swarm.report.style import OKABE_ITO, new_figure, plt
-
-#: Route colour by role.
-ROLE_COLOURS = {
-    "landing": OKABE_ITO["vermillion"],
-    "search": OKABE_ITO["blue"],
-    "relay": OKABE_ITO["purple"],
-    "surveillance": OKABE_ITO["green"],
-    "beacon": OKABE_ITO["orange"],
-    "spare": "#777777",
-}
+from swarm.report.style import OKABE_ITO, ROLE_COLOURS, new_figure, plt
 
 
 def summary_rows(plan: MissionPlan) -> list[list[str]]:
@@ -71,21 +61,6 @@ def robot_rows(plan: MissionPlan) -> list[list[str]]:
             ]
         )
     return rows
-
-
-def _md_table(rows: list[list[str]], header: bool = True) -> str:
-    if not header:
-        rows = [["", ""], *rows]
-    out = ["| " + " | ".join(rows[0]) + " |", "|" + "---|" * len(rows[0])]
-    out += ["| " + " | ".join(r) + " |" for r in rows[1:]]
-    return "\n".join(out)
-
-
-def _html_table(rows: list[list[str]], header: bool = True) -> str:
-    body = rows[1:] if header else rows
-    head = "<tr>" + "".join(f"<th>{html.escape(c)}</th>" for c in rows[0]) + "</tr>" if header else ""
-    cells = "".join("<tr>" + "".join(f"<td>{html.escape(c)}</td>" for c in r) + "</tr>" for r in body)
-    return f"<table>{head}{cells}</table>"
 
 
 def plan_figure_png(plan: MissionPlan) -> bytes:
@@ -144,23 +119,20 @@ def write_plan_report(plan: MissionPlan, out_dir: str | Path) -> dict[str, Path]
         [
             f"# {title}",
             "## Summary",
-            _md_table(summary, header=False),
+            md_table(summary, header=False),
             "## Robots",
-            _md_table(robots),
+            md_table(robots),
             "Files: plan.json (every waypoint), plan.geojson (routes, regions, tracks, relay links), "
             "report.html (with the map).",
         ]
     )
-    png = base64.b64encode(plan_figure_png(plan)).decode("ascii")
-    page = (
-        "<!DOCTYPE html>\n<html><head><meta charset='utf-8'>"
-        f"<title>{html.escape(title)}</title><style>"
-        "body{font-family:sans-serif;margin:2em;max-width:1400px}"
-        "table{border-collapse:collapse;margin:1em 0}td,th{border:1px solid #ccc;padding:2px 8px;"
-        "font-size:13px;text-align:left}img{max-width:100%}</style></head><body>"
-        f"<h1>{html.escape(title)}</h1><h2>Summary</h2>{_html_table(summary, header=False)}"
-        f"<h2>Map</h2><img alt='plan map' src='data:image/png;base64,{png}'>"
-        f"<h2>Robots</h2>{_html_table(robots)}</body></html>\n"
+    page = html_page(
+        title,
+        [
+            f"<h1>{html.escape(title)}</h1><h2>Summary</h2>{html_table(summary, header=False)}",
+            html_figure("Map", plan_figure_png(plan)),
+            f"<h2>Robots</h2>{html_table(robots)}",
+        ],
     )
     paths = {"report.md": out / "report.md", "report.html": out / "report.html"}
     write_text_atomic(paths["report.md"], md + "\n")

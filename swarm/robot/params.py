@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, fields
+from functools import cached_property
 from pathlib import Path
 
 from swarm.errors import InputError
@@ -56,7 +57,7 @@ class RobotParams:
         """The thesis's wheel inertia moved to the robot axis: I_w + m_w h^2 (section 2.2.2)."""
         return parallel_axis(self.wheel_spin_inertia_kgm2, self.wheel_mass_kg, self.wheel_offset_m)
 
-    @property
+    @cached_property
     def yaw_inertia_kgm2(self) -> float:
         """Yaw inertia for the `skid` model: the body without wheels as a box, plus each wheel by
         the parallel-axis theorem, so no mass is counted twice (the thesis boxes the whole mass)."""

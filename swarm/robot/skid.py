@@ -83,7 +83,10 @@ class _Contacts(NamedTuple):
 
 
 def _flat(c: Coeffs, name: str) -> np.ndarray:
-    return np.asarray(c[name], dtype=np.float64).reshape(-1)
+    value = c[name]
+    if type(value) is np.ndarray and value.ndim == 1 and value.dtype == np.float64:
+        return value  # the simulator's per-robot columns: no conversion
+    return np.asarray(value, dtype=np.float64).reshape(-1)
 
 
 @dataclass(frozen=True)
@@ -131,8 +134,14 @@ class SkidModel:
     def _contacts(self, state: np.ndarray, omega: np.ndarray, g: _Ground) -> _Contacts:
         a, b, reg = self.half_track_m, self.half_base_m, self.regularization_mps
         u, v, r = state[:, U], state[:, V], state[:, R]
-        vx = np.stack([u - a * r, u + a * r])
-        vy = np.stack([v + b * r, v - b * r])
+        # (side, n) and (axle, n), filled in place: np.stack costs more than the arithmetic here
+        ar, br = a * r, b * r
+        vx = np.empty((2, len(u)))
+        np.subtract(u, ar, out=vx[0])
+        np.add(u, ar, out=vx[1])
+        vy = np.empty((2, len(v)))
+        np.add(v, br, out=vy[0])
+        np.subtract(v, br, out=vy[1])
         w = omega.T * g.surface_m
         sx = vx - w
         rolling = np.maximum(np.abs(w), np.abs(vx))
@@ -227,8 +236,13 @@ class SkidModel:
         dt_s: float,
         wrench: np.ndarray | None = None,
         load_scale: np.ndarray | None = None,
+        traction_out: np.ndarray | None = None,
     ) -> np.ndarray:
         """Advance n robots by `dt_s`: linearly implicit in the velocities, then the pose.
+
+        `traction_out` (n, 2), if given, receives each side's slip traction at the new velocities
+        (the longitudinal contact force without rolling resistance, N): what the motors push with,
+        for the power they draw.
 
         `wrench` (n, 3) is an external body-frame force and moment (Fx, Fy, Mz): gravity along a
         slope, jet thrust, current and wave forces. `load_scale` (n,) multiplies the wheels'
@@ -257,12 +271,19 @@ class SkidModel:
         b2 = m * (v / dt_s - u * r)
         b3 = inertia / dt_s * r - a * (drive[0] - drive[1])
         if wrench is not None:
-            ext = np.broadcast_to(wrench, (state.shape[0], 3))
+            ext = (
+                wrench
+                if np.shape(wrench) == (state.shape[0], 3)
+                else np.broadcast_to(wrench, (state.shape[0], 3))
+            )
             b1, b2, b3 = b1 + ext[:, 0], b2 + ext[:, 1], b3 + ext[:, 2]
         e1, e2 = a13 / a11, a23 / a22
         r_new = (b3 - e1 * b1 - e2 * b2) / (a33 - e1 * a13 - e2 * a23)
         u_new = (b1 - a13 * r_new) / a11
         v_new = (b2 - a23 * r_new) / a22
+        if traction_out is not None:
+            traction_out[:, 0] = k.kx_side[0] * (k.w[0] - (u_new - a * r_new))
+            traction_out[:, 1] = k.kx_side[1] * (k.w[1] - (u_new + a * r_new))
         out = np.empty_like(state)
         heading_mid = state[:, HEADING] + 0.5 * dt_s * r_new
         cos_h, sin_h = np.cos(heading_mid), np.sin(heading_mid)

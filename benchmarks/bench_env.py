@@ -1,0 +1,272 @@
+"""Agent-steps per second through `SwarmEnv.step` against MPE's `simple_spread_v3` at the same
+agent counts.
+
+    python benchmarks/bench_env.py [--counts 10 100 1000] [--steps 200] [--box-s 15] [--no-breakdown]
+
+Our side: `benchmarks/missions/beach_swarm.yaml`, a swarm already on the beach of gentle_fine
+searching it for mines (no sea transit), the count set per run with overrides={"swarm.count": n},
+wheels mode, hazards at their defaults. The peer: mpe2's `simple_spread_v3.parallel_env(N=n,
+max_cycles=..., continuous_actions=True)` (PettingZoo's parallel API through its AEC conversion).
+
+Method, the same for both: build the env, `reset(seed=0)`, draw every action of the run from a
+seeded numpy Generator and pack them into per-step action dicts *before* the clock starts (sampling
+is not timed), run `--warmup` steps, then time `env.step` for `--steps` steps or until `--box-s`
+seconds have passed, whichever comes first (at least one step; the last step may run past the box).
+A rate is the number of live agents summed over the timed steps, divided by the wall time. When
+MPE's warm-up step alone takes more than half the time box (N = 1000: one step takes over ten
+seconds), that step is the measurement; the table says how many steps each rate rests on. Single
+process, one core; on a shared machine expect +-20% between runs.
+
+Targets: at least 100x MPE's agent-steps/s at 100 agents, and at least 200,000 agent-steps/s at
+1000 robots.
+
+Then (unless --no-breakdown), where our step's time goes at 100 robots and at the largest count:
+timers wrapped around the environment's internals for a separate run (so they do not slow the rates
+above).
+`--profile` prints cProfile's top functions for that run instead of the timers.
+"""
+
+from __future__ import annotations
+
+import argparse
+import cProfile
+import functools
+import io
+import os
+import platform
+import pstats
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+import swarm.sim
+from swarm.sim.env import SwarmEnv
+
+MISSION = Path(__file__).resolve().parent / "missions" / "beach_swarm.yaml"
+#: The targets: ratio to MPE at 100 agents, our absolute rate at 1000 robots.
+TARGET_RATIO_AT_100 = 100.0
+TARGET_RATE_AT_1000 = 200_000.0
+
+
+@dataclass
+class Rate:
+    agent_steps: int
+    steps: int
+    seconds: float
+
+    @property
+    def per_s(self) -> float:
+        return self.agent_steps / self.seconds if self.seconds > 0 else float("nan")
+
+    @property
+    def ms_per_step(self) -> float:
+        return 1e3 * self.seconds / self.steps if self.steps else float("nan")
+
+
+def _time_steps(env: Any, actions: list[dict[str, Any]], warmup: int, steps: int, box_s: float) -> Rate:
+    """Warm up, then time `env.step` over pre-built action dicts (only live agents get one)."""
+    k = 0
+
+    def one() -> tuple[int, float]:
+        nonlocal k
+        acts = actions[k % len(actions)]
+        if len(env.agents) != len(acts):
+            acts = {a: acts[a] for a in env.agents}
+        live = len(env.agents)
+        t0 = time.perf_counter()
+        env.step(acts)
+        k += 1
+        return live, time.perf_counter() - t0
+
+    first = None
+    for _ in range(warmup):
+        first = one()
+        if first[1] > box_s / 2:  # one step takes half the time box: it is the measurement
+            return Rate(first[0], 1, first[1])
+    done, seconds, agent_steps = 0, 0.0, 0
+    while done < steps and (done == 0 or seconds < box_s) and env.agents:
+        live, dt = one()
+        done += 1
+        seconds += dt
+        agent_steps += live
+    return Rate(agent_steps, done, seconds)
+
+
+def _wheel_actions(env: SwarmEnv, steps: int, seed: int) -> list[dict[str, np.ndarray]]:
+    rng = np.random.default_rng(seed)
+    a = rng.uniform(-1.0, 1.0, (steps, len(env.possible_agents), 3)).astype(np.float32)
+    return [dict(zip(env.possible_agents, a[k], strict=True)) for k in range(steps)]
+
+
+def make_ours(n: int) -> SwarmEnv:
+    env = swarm.sim.parallel_env(mission=MISSION, overrides={"swarm.count": n}, action_mode="wheels")
+    env.reset(seed=0)
+    return env
+
+
+def ours_rate(n: int, steps: int, warmup: int, box_s: float, seed: int) -> Rate:
+    env = make_ours(n)
+    actions = _wheel_actions(env, steps + warmup, seed)
+    return _time_steps(env, actions, warmup, steps, box_s)
+
+
+def mpe_rate(n: int, steps: int, warmup: int, box_s: float, seed: int) -> Rate:
+    from mpe2 import simple_spread_v3
+
+    env = simple_spread_v3.parallel_env(N=n, max_cycles=10**9, continuous_actions=True)
+    env.reset(seed=0)
+    rng = np.random.default_rng(seed)
+    agents = list(env.possible_agents)
+    shape = env.action_space(agents[0]).shape
+    low, high = env.action_space(agents[0]).low, env.action_space(agents[0]).high
+    k = min(steps + warmup, 50)  # the action dicts are reused cyclically
+    a = rng.uniform(low, high, (k, n, *shape)).astype(np.float32)
+    actions = [dict(zip(agents, a[i], strict=True)) for i in range(k)]
+    return _time_steps(env, actions, max(warmup, 1), steps, box_s)
+
+
+# the breakdown ----------------------------------------------------------------------------------------
+class Timers:
+    """Wall time per label, accumulated by wrappers set on an object's attributes."""
+
+    def __init__(self) -> None:
+        self.seconds: dict[str, float] = {}
+        self.calls: dict[str, int] = {}
+
+    def wrap(self, obj: object, name: str, label: str) -> None:
+        fn: Callable[..., Any] = getattr(obj, name)
+        self.seconds.setdefault(label, 0.0)
+        self.calls.setdefault(label, 0)
+
+        @functools.wraps(fn)
+        def timed(*args: Any, **kwargs: Any) -> Any:
+            t0 = time.perf_counter()
+            try:
+                return fn(*args, **kwargs)
+            finally:
+                self.seconds[label] += time.perf_counter() - t0
+                self.calls[label] += 1
+
+        setattr(obj, name, timed)
+
+
+#: (attribute of the env, label): the parts of `_advance` timed one by one.
+ADVANCE_PARTS = (
+    ("_commands", "actions -> wheel and jet commands"),
+    ("_sense", "mine sensing"),
+    ("_update_comms", "radio links (every comms_period_s)"),
+    ("_hazards", "hazards"),
+)
+
+
+def breakdown(n: int, steps: int, seed: int, profile: bool) -> str:
+    env = make_ours(n)
+    actions = _wheel_actions(env, steps, seed)
+    if profile:
+        pr = cProfile.Profile()
+        pr.enable()
+        for k in range(steps):
+            env.step(actions[k] if len(env.agents) == n else {a: actions[k][a] for a in env.agents})
+        pr.disable()
+        out = io.StringIO()
+        pstats.Stats(pr, stream=out).sort_stats("cumulative").print_stats(25)
+        return out.getvalue()
+    timers = Timers()
+    timers.wrap(env, "_advance", "_advance")
+    timers.wrap(env.physics, "step", "physics (skid model, terrain, waves)")
+    for name, label in ADVANCE_PARTS:
+        timers.wrap(env, name, label)
+    timers.wrap(env, "_observe", "observations (own, patch, neighbours, links, task)")
+    timers.wrap(env, "_info", "infos (one dict per agent)")
+    total = 0.0
+    agent_steps = 0
+    for k in range(steps):
+        acts = actions[k] if len(env.agents) == n else {a: actions[k][a] for a in env.agents}
+        agent_steps += len(env.agents)
+        t0 = time.perf_counter()
+        env.step(acts)
+        total += time.perf_counter() - t0
+    s = timers.seconds
+    parts = {name: s[name] for name in s if name not in ("_advance",)}
+    inner = sum(s[label] for _, label in ADVANCE_PARTS) + s["physics (skid model, terrain, waves)"]
+    parts["rest of the world step (release, phases, routes, score...)"] = s["_advance"] - inner
+    parts["step(): building the returned dicts, ending agents"] = (
+        total - s["_advance"] - s["observations (own, patch, neighbours, links, task)"]
+        - s["infos (one dict per agent)"]
+    )  # fmt: skip
+    lines = [
+        f"Where SwarmEnv.step's time goes at {n} robots ({steps} steps, {agent_steps / total:,.0f} "
+        f"agent-steps/s with the timers on; {1e3 * total / steps:.2f} ms/step):",
+        "",
+        f"{'part':<62} {'ms/step':>8} {'share':>6}",
+        f"{'-' * 62} {'-' * 8} {'-' * 6}",
+    ]
+    for label, sec in sorted(parts.items(), key=lambda kv: -kv[1]):
+        lines.append(f"{label:<62} {1e3 * sec / steps:>8.2f} {100 * sec / total:>5.1f}%")
+    lines.append(f"{'total':<62} {1e3 * total / steps:>8.2f} {100.0:>5.1f}%")
+    calls = timers.calls["radio links (every comms_period_s)"]
+    lines.append("")
+    lines.append(
+        f"The radio update runs every {env.config.comms_period_s:g} s of simulated time "
+        f"({env.config.comms_period_s / env.config.dt_s:g} steps); its ms/step above is averaged over "
+        f"all {calls} calls, of which {env.links_version} rebuilt the links."
+    )
+    return "\n".join(lines)
+
+
+def main(argv: list[str] | None = None) -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--counts", type=int, nargs="+", default=[10, 100, 1000])
+    ap.add_argument("--steps", type=int, default=200, help="timed steps per measurement (at most)")
+    ap.add_argument("--warmup", type=int, default=5, help="untimed steps first")
+    ap.add_argument("--box-s", type=float, default=15.0, help="time box per measurement, seconds")
+    ap.add_argument("--seed", type=int, default=0, help="seed of the pre-drawn actions")
+    ap.add_argument("--no-breakdown", action="store_true")
+    ap.add_argument("--profile", action="store_true", help="cProfile instead of the timers")
+    args = ap.parse_args(argv)
+
+    print(
+        f"python {platform.python_version()}, numpy {np.__version__}, {os.cpu_count()} cpus; "
+        f"mission {MISSION.relative_to(MISSION.parents[2])}; wheels mode, random actions drawn beforehand"
+    )
+    print(f"up to {args.steps} timed steps after {args.warmup} warm-up steps, {args.box_s:g} s time box each")
+    print()
+    header = (
+        f"{'agents':>6} | {'ours steps':>10} {'ours agent-steps/s':>18} {'ms/step':>8} | "
+        f"{'MPE steps':>9} {'MPE agent-steps/s':>17} {'ms/step':>9} | {'ratio':>8}"
+    )
+    print(header)
+    print("-" * len(header))
+    rows: dict[int, tuple[Rate, Rate]] = {}
+    for n in args.counts:
+        ours = ours_rate(n, args.steps, args.warmup, args.box_s, args.seed)
+        mpe = mpe_rate(n, args.steps, args.warmup, args.box_s, args.seed)
+        rows[n] = (ours, mpe)
+        print(
+            f"{n:>6} | {ours.steps:>10} {ours.per_s:>18,.0f} {ours.ms_per_step:>8.2f} | "
+            f"{mpe.steps:>9} {mpe.per_s:>17,.1f} {mpe.ms_per_step:>9.1f} | {ours.per_s / mpe.per_s:>7,.1f}x",
+            flush=True,
+        )
+    print()
+    if 100 in rows:
+        ratio = rows[100][0].per_s / rows[100][1].per_s
+        verdict = "PASS" if ratio >= TARGET_RATIO_AT_100 else "FAIL"
+        print(
+            f"{verdict}  100 agents: {ratio:,.1f}x MPE's agent-steps/s (target >= {TARGET_RATIO_AT_100:g}x)"
+        )
+    if 1000 in rows:
+        rate = rows[1000][0].per_s
+        verdict = "PASS" if rate >= TARGET_RATE_AT_1000 else "FAIL"
+        print(f"{verdict}  1000 robots: {rate:,.0f} agent-steps/s (target >= {TARGET_RATE_AT_1000:,.0f})")
+    if not args.no_breakdown:
+        for n in sorted({n for n in args.counts if n == 100} | {max(args.counts)}):
+            print()
+            print(breakdown(n, min(args.steps, 200), args.seed, args.profile))
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,49 @@
+"""The swarm simulator: a PettingZoo environment in which every robot moves by the `skid` model
+over the mission's beach map, hazards take robots, and the survivors coordinate over radio.
+
+```python
+import swarm.sim
+env = swarm.sim.parallel_env(mission="missions/mine_clear.yaml", overrides={"swarm.count": 40})
+aec = swarm.sim.env(mission="missions/landing.yaml")        # the AEC form, by PettingZoo's conversion
+env = pettingzoo.make("parallel", "surf_swarm/Swarm-v0", mission="missions/relay.yaml")
+```
+
+Importing `swarm.sim` registers `surf_swarm/Swarm-v0` in PettingZoo's registries (parallel and AEC).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import pettingzoo
+from pettingzoo.utils import conversions, wrappers
+
+from swarm.sim.env import ACTION_MODES, COMMANDS, SimConfig, SwarmEnv
+
+ENV_ID = "surf_swarm/Swarm-v0"
+
+
+def parallel_env(**kwargs: Any) -> SwarmEnv:
+    """The mission as a `ParallelEnv`: `mission=` path (or loaded Mission), `overrides=`,
+    `action_mode=` "wheels" | "command", `render_mode=`, `config=` (`SimConfig`), `max_cycles=`."""
+    return SwarmEnv(**kwargs)
+
+
+def env(**kwargs: Any) -> pettingzoo.AECEnv:
+    """The AEC form, through PettingZoo's own parallel-to-AEC conversion and order enforcement."""
+    return wrappers.OrderEnforcingWrapper(conversions.parallel_to_aec(SwarmEnv(**kwargs)))
+
+
+raw_env = SwarmEnv
+
+
+def _register() -> None:
+    if ENV_ID not in pettingzoo.parallel_registry:
+        pettingzoo.register("parallel", ENV_ID, entry_point=parallel_env)
+    if ENV_ID not in pettingzoo.aec_registry:
+        pettingzoo.register("aec", ENV_ID, entry_point=env)
+
+
+_register()
+
+__all__ = ["ACTION_MODES", "COMMANDS", "ENV_ID", "SimConfig", "SwarmEnv", "env", "parallel_env", "raw_env"]

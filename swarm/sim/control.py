@@ -1,0 +1,99 @@
+"""Low-level control shared by the high-level command mode and the scripted policy: drive each
+robot toward a target point, on wheels ashore and with the jet (and paddling wheels) in water.
+
+A pure-pursuit style heading controller, vectorized over the swarm: the robot turns toward the
+target at a yaw rate proportional to the heading error, slowing its forward speed by cos(error)
+and turning in place when the error exceeds `PIVOT_ERROR_RAD`. Wheel surface speeds come from the
+commanded forward speed and yaw rate through the skid-steer effective track width
+d / `EFFECTIVE_TRACK_SCALE` (thesis eqs. 2.23-2.26: a skid-steered robot turns as if its track were
+d / 0.73 wide), so the commanded turn is close to the one the `skid` model produces.
+
+An inverted robot (turned over by a breaker, thesis 1.2) is driven through the inverse of the
+physics' wheel mapping (physical = -command[:, ::-1]), so the controller's intent is unchanged.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+#: Thesis eq. 2.26: the effective track width of the skid-steered robot is d / 0.73.
+EFFECTIVE_TRACK_SCALE = 0.73
+#: Heading error beyond which the robot turns in place before driving on (rad).
+PIVOT_ERROR_RAD = math.radians(60.0)
+#: Yaw-rate gain on the heading error (1/s) and the largest commanded yaw rate (rad/s).
+YAW_GAIN_PER_S = 1.5
+MAX_YAW_RATE_RADPS = 1.2
+#: Within this distance of its target a robot stops (m).
+ARRIVE_M = 0.25
+#: A robot counts as in water (jet on) above this submersion (buoyancy fraction of its cell).
+JET_SUBMERSION = 0.3
+
+
+@dataclass(frozen=True)
+class DriveLimits:
+    """One robot type's drive limits, from the mission's robot section."""
+
+    wheel_radius_m: float
+    track_width_m: float
+    cruise_speed_mps: float  # wheel surface speed at cruise (robot.wheel_speed_mps)
+    max_wheel_speed_mps: float  # the largest wheel surface speed the motors give
+    jet_thrust_max_n: float
+
+    @property
+    def effective_half_track_m(self) -> float:
+        return self.track_width_m / EFFECTIVE_TRACK_SCALE / 2.0
+
+
+def wrap_angle(a: np.ndarray) -> np.ndarray:
+    """Angles wrapped to [-pi, pi)."""
+    return (np.asarray(a) + np.pi) % (2.0 * np.pi) - np.pi
+
+
+def to_body(dxy: np.ndarray, heading_rad: np.ndarray) -> np.ndarray:
+    """World-frame vectors (n, 2) or (n, k, 2) in each robot's body frame (x forward, y left)."""
+    c, s = np.cos(heading_rad), np.sin(heading_rad)
+    if dxy.ndim == 3:
+        c, s = c[:, None], s[:, None]
+    out = np.empty_like(dxy)
+    out[..., 0] = c * dxy[..., 0] + s * dxy[..., 1]
+    out[..., 1] = -s * dxy[..., 0] + c * dxy[..., 1]
+    return out
+
+
+def drive_toward(
+    state: np.ndarray,
+    target_m: np.ndarray,
+    speed_mps: np.ndarray | float,
+    submersion: np.ndarray,
+    inverted: np.ndarray,
+    limits: DriveLimits,
+    moving: np.ndarray | None = None,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Wheel commands (n, 2) rad/s and jet thrust (n,) N that take each robot toward its target.
+
+    `speed_mps` is the wanted forward speed; `moving` (n,) False holds a robot still (wheels and
+    jet off). Returns the commands and each robot's distance to its target."""
+    d = target_m - state[:, :2]
+    dist = np.hypot(d[:, 0], d[:, 1])
+    go = dist > ARRIVE_M
+    if moving is not None:
+        go &= moving
+    err = wrap_angle(np.arctan2(d[:, 1], d[:, 0]) - state[:, 2])
+    yaw = np.clip(YAW_GAIN_PER_S * err, -MAX_YAW_RATE_RADPS, MAX_YAW_RATE_RADPS)
+    # slow down near the target so the robot stops on it rather than circling it
+    speed = np.minimum(np.broadcast_to(speed_mps, dist.shape), 0.1 + 0.5 * dist)
+    forward = np.where(np.abs(err) < PIVOT_ERROR_RAD, speed * np.cos(err), 0.0)
+    half = limits.effective_half_track_m
+    surface = np.stack([forward - half * yaw, forward + half * yaw], axis=1)
+    peak = np.max(np.abs(surface), axis=1, keepdims=True)
+    surface *= np.minimum(1.0, limits.max_wheel_speed_mps / np.maximum(peak, 1e-9))
+    wheels = surface / limits.wheel_radius_m
+    jet = np.where(submersion > JET_SUBMERSION, limits.jet_thrust_max_n * np.maximum(np.cos(err), 0.0), 0.0)
+    wheels[~go] = 0.0
+    jet[~go] = 0.0
+    flipped = np.asarray(inverted, bool)
+    wheels[flipped] = -wheels[flipped][:, ::-1]
+    return wheels, jet, dist

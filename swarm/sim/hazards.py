@@ -1,0 +1,415 @@
+"""Attrition as competing risks: which robots the hazards take in one environment step, and why.
+
+The env calls `HazardModel.step` once per step (dt_s about 0.5 s) for the whole swarm; everything
+is vectorized over robots, and the rare contact events (a mine, a hidden rock) are resolved only
+for the few robots a precomputed occupancy grid says could be touching one.
+
+Hazards, with their sources
+---------------------------
+Continuous hazards (a rate per second, `rates_per_s` columns, `RATE_CAUSES`):
+
+- failure: constant rate 1 / (attrition.mtbf_h x 3600) for every alive robot, at sea or ashore.
+  Random failures of field UGVs are close to exponential with a 6-20 h MTBF (Carlson & Murphy
+  2005, "How UGVs physically fail in the field", IEEE T-RO 21(3)).
+- immobilized: per metre driven, immobilization.per_km / 1000 x mode_factors.get(mode, 1) x
+  (1 + (slip / 0.3)^2); rate per second = that x distance_m / dt_s. The slip factor is assumed:
+  sinkage and digging-in grow with slip (Wong 2008, Theory of Ground Vehicles, ch. 2, slip
+  sinkage). Only on the map, and only on modes whose wheels touch the ground (buoyancy_fraction
+  < 1: not while swimming in deep water). Slip is clipped to [0, 1].
+- rock: rocks.damage_per_km / 1000 per metre driven on cells of mode "rock" (schema default;
+  assumed).
+- radio dropout: comms.dropout_per_h / 3600 for every alive robot whose radio still works
+  (assumed, mission key). The robot is lost as "cut_off" and `Losses.radio_dropped` is True.
+
+Within a step the continuous hazards combine exactly as competing risks with constant
+cause-specific hazards (Kalbfleisch & Prentice 2002, The Statistical Analysis of Failure Time
+Data, 2nd ed., ch. 8): P(lost this step) = 1 - exp(-sum(lambda) dt), and the cause is c with
+probability lambda_c / sum(lambda). Over a run, survival is exactly exp(-integral of sum(lambda)).
+
+Discrete events:
+
+- mine: a robot within minefield.trigger_radius_m of a mine that is active (not exploded, not
+  cleared) and not marked sets it off, on its first contact with that mine only, with probability
+  minefield.trigger_probability; the mine is then exploded (this model sets `minefield.exploded`).
+  One trial per robot-mine pair for the whole run: a robot that rolled over a fuze without setting
+  it off has the weight and track that will not set it off next time either (the trials would be
+  strongly correlated; assumed). Several new mines under one robot: tried in index order, the first
+  success is the one set off. Two robots setting off the same mine in one step: robots are resolved
+  in index order, the lowest index sets it off and the mine is gone for the others.
+- wave_impact: each breaker hit disables with surf.impact_damage_probability() (logistic in breaker
+  height; schema SurfHazard, assumed).
+- rock collision (cause "rock"): running into a cell of mode "boulder" (obstacle_hit), and the first
+  contact of each robot-hidden-rock pair (within ROCK_CONTACT_M of a hidden rock), each disable with
+  rocks.collision_damage_probability (schema; assumed); otherwise the robot just stops (the env's
+  physics). Driftwood and other impassable classes do no damage. A boulder hit reported in
+  consecutive steps is one collision (the robot pushing against it): only its onset is tried,
+  because impact damage comes from the impact, not from the contact that follows it.
+- immobilized (stuck rule): a robot `driving` with slip >= STUCK_SLIP for STUCK_AFTER_S in a row
+  (wheels spinning, no progress: soft sand, a slope too steep) is immobilized. Only on land modes
+  (not water: in the swash, surf and deep water spinning wheels mean swimming or surging, and the
+  surf time limit is the surf's own stuck rule).
+- battery: energy_wh <= 0.
+- sea_timeout: at_sea and sea_time_s > phases.sea_transit.time_limit_s.
+- surf_timeout: surf_time_s > phases.surf_crossing.time_limit_s (stranded, rolled in the surf).
+- cut_off (isolation): not at sea and isolated_s >= comms.isolation_limit_s (when set).
+- blast: the env's synchronized clearance; this model never assigns it.
+
+Resolution order (the first that fires is the cause): mine, wave_impact, rock collision, the
+continuous hazards, immobilized (stuck), battery, sea_timeout, surf_timeout, cut_off (isolation).
+Events caused by the motion during the step come first (a mine going off is a world event and is
+never pre-empted, so the mine field stays consistent); the continuous hazards act during the step;
+the threshold rules are conditions on the state at the end of the step, so they come last.
+
+Determinism: each step draws exactly `rng.random((n_robots, N_UNIFORMS))`, whoever is alive; a
+robot's draws are its own row. The same seed and the same inputs give identical Losses, and the
+generator stays aligned when robots are lost, so a robot's fate does not depend on how many others
+are still alive (common random numbers across the variants of a study). Give this model its own
+child generator (`SeedSequence.spawn`) so the other draws of the env do not shift it.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.spatial import cKDTree
+from shapely.geometry.base import BaseGeometry
+
+from swarm.mission import schema
+from swarm.robot.terrain import TerrainLibrary
+from swarm.sim.mines import MineField, sample_in
+
+#: Why a robot was lost; `Losses.cause` indexes this tuple.
+CAUSES: tuple[str, ...] = (
+    "failure",
+    "wave_impact",
+    "immobilized",
+    "rock",
+    "mine",
+    "battery",
+    "cut_off",
+    "sea_timeout",
+    "surf_timeout",
+    "blast",
+)
+CAUSE_DESCRIPTIONS: dict[str, str] = {
+    "failure": "random failure (electronics, drive train, leaks): exponential with the robot's MTBF",
+    "wave_impact": "disabled by a breaker hitting it in the surf zone",
+    "immobilized": "stuck: sinkage, high-centring, tangled in wrack, or wheels spinning without progress",
+    "rock": "disabled by driving over rock ground or running into a boulder or hidden rock",
+    "mine": "set off a mine",
+    "battery": "battery ran flat",
+    "cut_off": "radio failed, or isolated from the network too long: alive but nobody can command it",
+    "sea_timeout": "still at sea when the sea-transit time limit ran out",
+    "surf_timeout": "still in the surf zone when the surf-crossing time limit ran out (stranded, rolled)",
+    "blast": "caught in the synchronized clearance detonation",
+}
+NO_LOSS = -1
+_CAUSE = {name: i for i, name in enumerate(CAUSES)}
+
+#: The columns of `HazardModel.rates_per_s`, and the cause each one's loss is recorded as.
+RATE_CAUSES: tuple[str, ...] = ("failure", "immobilized", "rock", "cut_off")
+_RATE_CAUSE_INDEX = np.array([_CAUSE[c] for c in RATE_CAUSES], dtype=np.int64)
+_DROPOUT_COLUMN = 3
+
+#: Wheels spinning at this slip or more, while commanded, count toward the stuck rule.
+STUCK_SLIP = 0.9
+#: Seconds of continuous spinning after which a robot is immobilized (assumed: a stuck robot's
+#: recovery behaviours, rocking and reversing, have had a fair chance by then).
+STUCK_AFTER_S = 30.0
+#: A hidden rock under this distance from a robot's centre is in contact (about half the skid4
+#: body width, like the mine trigger radius).
+ROCK_CONTACT_M = 0.25
+#: Slip at which the immobilization rate has doubled (assumed; Wong 2008 slip sinkage).
+SLIP_SCALE = 0.3
+#: Uniforms drawn per robot per step: continuous (whether, which), wave, boulder, hidden rock, mine.
+N_UNIFORMS = 6
+_U_LOST, _U_WHICH, _U_WAVE, _U_BOULDER, _U_HIDDEN, _U_MINE = range(N_UNIFORMS)
+#: Largest occupancy grid of a contact index, cells (bool, so at most 4 MB).
+_MAX_GRID_CELLS = 1 << 22
+#: Float slack when summing steps toward STUCK_AFTER_S (0.1 s steps do not add up to 30.0 exactly).
+_TIME_EPS_S = 1e-9
+
+
+@dataclass
+class HazardInputs:
+    """One step's state of the swarm, as the hazards need it; everything (n,) unless noted."""
+
+    t_s: float  # mission time at the end of the step
+    dt_s: float
+    alive: np.ndarray  # bool: still in the mission (lost robots are ignored entirely)
+    at_sea: np.ndarray  # bool: released but not yet on the map
+    xy: np.ndarray  # (n, 2) positions at the end of the step
+    terrain: np.ndarray  # int class index of the map cell under the robot (ignored where at_sea)
+    distance_m: np.ndarray  # path length over the step
+    slip: np.ndarray  # mean longitudinal slip in [0, 1]
+    driving: np.ndarray  # bool: wheels commanded (|mean wheel speed| > 0.05 m/s)
+    wave_hits: np.ndarray  # bool: a breaker hit the robot in the surf zone this step
+    obstacle_hit: np.ndarray  # int class index of an impassable cell run into, -1 none
+    energy_wh: np.ndarray  # battery energy left (<= 0: flat)
+    sea_time_s: np.ndarray  # time since release spent at sea before reaching the surf
+    surf_time_s: np.ndarray  # time spent in the surf zone so far
+    isolated_s: np.ndarray  # time since the robot last had a radio link to anyone
+    radio_ok: np.ndarray  # bool: its radio still works (False after a dropout)
+
+
+@dataclass
+class Losses:
+    """Who was lost this step, and why."""
+
+    cause: np.ndarray  # (n,) int index into CAUSES, NO_LOSS where not lost this step
+    mine: np.ndarray  # (n,) int index of the mine set off, -1 none
+    radio_dropped: np.ndarray  # (n,) bool: the radio failed this step (the robot is lost as "cut_off")
+
+    @property
+    def lost(self) -> np.ndarray:
+        """Bool (n,): lost this step."""
+        return self.cause != NO_LOSS
+
+
+class _ContactIndex:
+    """Fixed points (mines, hidden rocks) and which robots may be within `radius_m` of one.
+
+    A cKDTree query costs about 0.2 us per robot, too much to pay for 1000 robots every step when
+    contacts are rare; so a bool grid of the cells any point's disk touches screens the robots
+    first (a superset: no contact is missed), and only those in flagged cells go to the tree.
+    """
+
+    def __init__(self, points: np.ndarray, radius_m: float) -> None:
+        self.points = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+        self.radius_m = float(radius_m)
+        self.tree = cKDTree(self.points) if len(self.points) else None
+        if self.tree is None:
+            return
+        r = self.radius_m
+        self.lo = self.points.min(axis=0) - r
+        extent = self.points.max(axis=0) + r - self.lo
+        cell = max(r, 1e-6)
+        while (math.floor(extent[0] / cell) + 1) * (math.floor(extent[1] / cell) + 1) > _MAX_GRID_CELLS:
+            cell *= 2.0
+        self.cell_m = cell
+        self.nx = math.floor(extent[0] / cell) + 1
+        self.ny = math.floor(extent[1] / cell) + 1
+        grid = np.zeros((self.ny, self.nx), dtype=bool)
+        lo_ix = np.floor((self.points - r - self.lo) / cell).astype(np.intp)
+        hi_ix = np.minimum(
+            np.floor((self.points + r - self.lo) / cell).astype(np.intp), [self.nx - 1, self.ny - 1]
+        )
+        span = math.ceil(2 * r / cell) + 1  # a disk's bounding box covers at most this many cells a side
+        for dx in range(span):
+            ix = np.minimum(lo_ix[:, 0] + dx, hi_ix[:, 0])
+            for dy in range(span):
+                grid[np.minimum(lo_ix[:, 1] + dy, hi_ix[:, 1]), ix] = True
+        self.grid = grid.ravel()
+
+    def near(self, xy: np.ndarray, mask: np.ndarray) -> tuple[np.ndarray, list[list[int]]]:
+        """Robots (indices where `mask`) with at least one point within radius_m, and those points."""
+        if self.tree is None:
+            return np.empty(0, dtype=np.intp), []
+        c = (xy - self.lo) * (1.0 / self.cell_m)
+        x, y = c[:, 0], c[:, 1]
+        # NaN positions (robots at sea, if the env leaves them so) compare False: never inside
+        sel = np.flatnonzero(mask & (x >= 0.0) & (x < self.nx) & (y >= 0.0) & (y < self.ny))
+        sel = sel[self.grid[y[sel].astype(np.intp) * self.nx + x[sel].astype(np.intp)]]  # >= 0: cast floors
+        if sel.size == 0:
+            return sel, []
+        hits = self.tree.query_ball_point(xy[sel], self.radius_m)
+        keep = [k for k, h in enumerate(hits) if h]
+        return sel[keep], [sorted(hits[k]) for k in keep]
+
+
+class HazardModel:
+    """The mission's hazards for a swarm of `n_robots`; keeps the per-robot state the rules need
+    (stuck timers, boulder contact, which mines and hidden rocks each robot has already touched)."""
+
+    def __init__(
+        self,
+        hazards: schema.Hazards,
+        phases: schema.Phases,
+        terrain_classes: Sequence[str],
+        library: TerrainLibrary,
+        minefield: MineField,
+        hidden_rocks_m: np.ndarray,
+        n_robots: int,
+    ) -> None:
+        self.hazards = hazards
+        self.phases = phases
+        self.terrain_classes = tuple(terrain_classes)
+        self.minefield = minefield
+        self.n = int(n_robots)
+        modes = [library[name] for name in self.terrain_classes]  # every map class names a mode
+
+        imm = hazards.immobilization
+        factors = imm.mode_factors
+        # per-class rates per metre driven; the slip factor multiplies the immobilization one
+        self._immob_per_m = np.array(
+            [
+                imm.per_km / 1000.0 * factors.get(m.name, 1.0) if m.buoyancy_fraction < 1.0 else 0.0
+                for m in modes
+            ]
+        )
+        self._rock_per_m = np.array(
+            [hazards.rocks.damage_per_km / 1000.0 if m.name == "rock" else 0.0 for m in modes]
+        )
+        self._can_stick = np.array([not m.is_water for m in modes], dtype=bool)
+        # one extra False at the end, so obstacle_hit == -1 indexes "no boulder"
+        self._is_boulder = np.array([m.name == "boulder" for m in modes] + [False], dtype=bool)
+        self._failure_per_s = 1.0 / (hazards.attrition.mtbf_h * 3600.0)
+        self._dropout_per_s = hazards.comms.dropout_per_h / 3600.0
+        self._p_wave = hazards.surf.impact_damage_probability()
+        self._p_collision = hazards.rocks.collision_damage_probability
+        self._isolation_s = hazards.comms.isolation_limit_s
+        self._sea_limit_s = phases.sea_transit.time_limit_s
+        self._surf_limit_s = phases.surf_crossing.time_limit_s
+
+        self._mines = _ContactIndex(minefield.positions_m, minefield.trigger_radius_m)
+        self._rocks = _ContactIndex(hidden_rocks_m, ROCK_CONTACT_M)
+        self._mine_seen: set[tuple[int, int]] = set()
+        self._rock_seen: set[tuple[int, int]] = set()
+        self._stuck_s = np.zeros(self.n)
+        self._on_boulder = np.zeros(self.n, dtype=bool)
+
+    @property
+    def stuck_s(self) -> np.ndarray:
+        """Seconds each robot has been spinning its wheels in a row (read-only view)."""
+        view = self._stuck_s.view()
+        view.flags.writeable = False
+        return view
+
+    def rates_per_s(self, inp: HazardInputs) -> np.ndarray:
+        """(n, 4) continuous hazard rates, per second, columns `RATE_CAUSES`: failure, immobilized,
+        rock, radio dropout; zero for robots not alive."""
+        self._check(inp)
+        on_map = inp.alive & ~inp.at_sea
+        return self._rates(inp, on_map, np.where(on_map, inp.terrain, 0))
+
+    def _rates(self, inp: HazardInputs, on_map: np.ndarray, cls: np.ndarray) -> np.ndarray:
+        per_s = inp.distance_m * (on_map / inp.dt_s)
+        slip = np.clip(inp.slip, 0.0, 1.0) * (1.0 / SLIP_SCALE)
+        rates = np.empty((self.n, 4))
+        rates[:, 0] = inp.alive * self._failure_per_s
+        rates[:, 1] = self._immob_per_m[cls] * (1.0 + slip * slip) * per_s
+        rates[:, 2] = self._rock_per_m[cls] * per_s
+        rates[:, 3] = (inp.alive & inp.radio_ok) * self._dropout_per_s
+        return rates
+
+    def step(self, inp: HazardInputs, rng: np.random.Generator) -> Losses:
+        """Decide which robots are lost this step and why (see the module docstring for the order)."""
+        self._check(inp)
+        u = rng.random((self.n, N_UNIFORMS))  # fixed shape: see "Determinism" above
+        alive = inp.alive
+        on_map = alive & ~inp.at_sea
+        cls = np.where(on_map, inp.terrain, 0)  # the terrain is not looked at where at sea
+        rates = self._rates(inp, on_map, cls)
+        n = self.n
+        cause = np.full(n, NO_LOSS, dtype=np.int64)
+        mine = np.full(n, -1, dtype=np.int64)
+
+        # the state-keeping rules run for every robot, whatever else takes it this step
+        stuck = self._update_stuck(inp, on_map, cls)
+        boulder = self._is_boulder[inp.obstacle_hit] & alive
+        new_boulder = boulder & ~self._on_boulder
+        self._on_boulder = boulder
+        hidden = self._hidden_rock_hits(inp.xy, on_map, u[:, _U_HIDDEN])
+        self._trigger_mines(inp.xy, on_map, u[:, _U_MINE], mine)
+
+        # continuous: P(lost) = 1 - exp(-sum(lambda) dt); cause by lambda_c / sum(lambda)
+        total = rates.sum(axis=1)
+        cont = u[:, _U_LOST] < -np.expm1(-total * inp.dt_s)
+        which = np.zeros(n, dtype=np.intp)
+        if cont.any():
+            cum = np.cumsum(rates[cont], axis=1)
+            # cum[:, -1] rather than total: the pick stays < 4 whatever the rounding
+            which[cont] = (cum <= u[cont, _U_WHICH][:, None] * cum[:, -1:]).sum(axis=1)
+
+        # lowest priority first, so higher ones overwrite
+        if self._isolation_s is not None:
+            cause[on_map & (inp.isolated_s >= self._isolation_s)] = _CAUSE["cut_off"]
+        cause[alive & (inp.surf_time_s > self._surf_limit_s)] = _CAUSE["surf_timeout"]
+        cause[alive & inp.at_sea & (inp.sea_time_s > self._sea_limit_s)] = _CAUSE["sea_timeout"]
+        cause[alive & (inp.energy_wh <= 0.0)] = _CAUSE["battery"]
+        cause[stuck] = _CAUSE["immobilized"]
+        cause[cont] = _RATE_CAUSE_INDEX[which[cont]]
+        collided = (new_boulder & (u[:, _U_BOULDER] < self._p_collision)) | hidden
+        cause[collided] = _CAUSE["rock"]
+        cause[alive & inp.wave_hits & (u[:, _U_WAVE] < self._p_wave)] = _CAUSE["wave_impact"]
+        cause[mine >= 0] = _CAUSE["mine"]
+        dropped = cont & (which == _DROPOUT_COLUMN) & (cause == _CAUSE["cut_off"])
+        return Losses(cause=cause, mine=mine, radio_dropped=dropped)
+
+    # --- the rules with state ------------------------------------------------------------------
+
+    def _update_stuck(self, inp: HazardInputs, on_map: np.ndarray, cls: np.ndarray) -> np.ndarray:
+        """Advance the stuck timers; True where a robot has spun its wheels for STUCK_AFTER_S."""
+        spinning = on_map & inp.driving & (inp.slip >= STUCK_SLIP) & self._can_stick[cls]
+        self._stuck_s = np.where(spinning, self._stuck_s + inp.dt_s, 0.0)
+        return self._stuck_s >= STUCK_AFTER_S - _TIME_EPS_S
+
+    def _hidden_rock_hits(self, xy: np.ndarray, on_map: np.ndarray, u: np.ndarray) -> np.ndarray:
+        """True where first contacts with hidden rocks disable a robot: 1 - (1 - p)^k for k new rocks."""
+        hit = np.zeros(self.n, dtype=bool)
+        robots, near = self._rocks.near(xy, on_map)
+        for i, rocks in zip(robots.tolist(), near, strict=True):
+            new = [r for r in rocks if (i, r) not in self._rock_seen]
+            self._rock_seen.update((i, r) for r in new)
+            if new and u[i] < 1.0 - (1.0 - self._p_collision) ** len(new):
+                hit[i] = True
+        return hit
+
+    def _trigger_mines(self, xy: np.ndarray, on_map: np.ndarray, u: np.ndarray, mine: np.ndarray) -> None:
+        """Try every first robot-mine contact; set `mine[i]` and mark the mine exploded where one goes off.
+
+        Robots in index order; with k new mines under one robot, the first success of k Bernoulli(p)
+        trials in mine-index order is the geometric J = floor(log(1 - u) / log(1 - p)) from one uniform.
+        """
+        if self._mines.tree is None:
+            return
+        mf = self.minefield
+        p = mf.trigger_probability
+        robots, near = self._mines.near(xy, on_map)
+        for i, mines in zip(robots.tolist(), near, strict=True):
+            new = [m for m in mines if not (mf.exploded[m] or mf.cleared[m] or mf.marked[m])]
+            new = [m for m in new if (i, m) not in self._mine_seen]
+            if not new:
+                continue
+            self._mine_seen.update((i, m) for m in new)
+            if p <= 0.0:
+                continue
+            j = 0 if p >= 1.0 else math.floor(math.log1p(-u[i]) / math.log1p(-p))
+            if j < len(new):
+                mine[i] = new[j]
+                mf.exploded[new[j]] = True
+
+    def _check(self, inp: HazardInputs) -> None:
+        if inp.alive.shape != (self.n,) or inp.xy.shape != (self.n, 2):
+            raise ValueError(f"hazard inputs for {inp.alive.shape} robots, the model has {self.n}")
+        if not inp.dt_s > 0.0:
+            raise ValueError(f"dt_s must be > 0, got {inp.dt_s}")
+
+
+def hidden_rocks(
+    hazards: schema.Hazards, land_polygon_or_none: BaseGeometry | None, rng: np.random.Generator
+) -> np.ndarray:
+    """(k, 2) unmapped rocks of one run: Poisson(hidden_per_ha x area_ha), uniform over the beach's
+    land area (a Poisson point process, the usual model of scattered obstacles; assumed)."""
+    per_ha = hazards.rocks.hidden_per_ha
+    if land_polygon_or_none is None or per_ha <= 0.0 or land_polygon_or_none.is_empty:
+        return np.empty((0, 2))
+    count = int(rng.poisson(per_ha * land_polygon_or_none.area / 1e4))
+    return sample_in([land_polygon_or_none], count, rng)
+
+
+def hidden_rocks_in_cells(
+    hazards: schema.Hazards, centers_m: np.ndarray, cell_m: float, rng: np.random.Generator
+) -> np.ndarray:
+    """(k, 2) unmapped rocks over land given as grid cells (their centres, `cell_m` square): the
+    same Poisson process as `hidden_rocks`, drawn cell-wise so no land polygon has to be built."""
+    per_ha = hazards.rocks.hidden_per_ha
+    centers = np.asarray(centers_m, dtype=np.float64).reshape(-1, 2)
+    if per_ha <= 0.0 or not len(centers):
+        return np.empty((0, 2))
+    count = int(rng.poisson(per_ha * len(centers) * cell_m * cell_m / 1e4))
+    cells = centers[rng.integers(0, len(centers), size=count)]
+    return cells + rng.uniform(-cell_m / 2, cell_m / 2, size=(count, 2))

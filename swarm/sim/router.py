@@ -1,0 +1,84 @@
+"""Routes planned while the mission runs (a spare taking over a lost robot's task, the way back to
+sea): a straight line where the cost map allows it, else an OMPL path with the fast profile.
+
+Endpoints that fall on blocked cells (a robot pushed into the footprint margin, a target in the
+water) are moved to the nearest free cell first, and the original target is appended when it is
+in the water (the robot swims the last stretch). Paths are seeded per call from the router's seed
+and a counter, so a run replays exactly.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy import ndimage
+
+from swarm.planning.costmap import NO_TRACTION, CostMap, PlanningError
+from swarm.planning.paths import plan_path
+from swarm.planning.profiles import DEFAULT_PROFILE, PlannerProfile
+
+
+class Router:
+    """Plans ground routes over one cost map during a run."""
+
+    def __init__(self, cm: CostMap, seed: int, profile: PlannerProfile = DEFAULT_PROFILE) -> None:
+        self.cm = cm
+        self.profile = profile
+        self.seed = seed
+        self.calls = 0
+        _, (self._near_r, self._near_c) = ndimage.distance_transform_edt(cm.blocked, return_indices=True)
+
+    def snap(self, xy: np.ndarray) -> np.ndarray:
+        """(x, y) if a robot may stand there, else the centre of the nearest free cell."""
+        x, y = float(xy[0]), float(xy[1])
+        if bool(self.cm.is_free(x, y)):
+            return np.array([x, y])
+        r, c = (int(v) for v in self.cm.cell_of(x, y))
+        r2, c2 = int(self._near_r[r, c]), int(self._near_c[r, c])
+        return np.array([float(v) for v in self.cm.center_of(r2, c2)])
+
+    def reachable(self, xy: np.ndarray) -> np.ndarray:
+        """A target a robot can get to: itself if free or open water (it swims there), else the
+        nearest free cell (a track point on a driftwood log, in a boulder's footprint margin)."""
+        x, y = float(xy[0]), float(xy[1])
+        if bool(self.cm.is_free(x, y)):
+            return np.array([x, y])
+        r, c = (int(v) for v in self.cm.cell_of(x, y))
+        return np.array([x, y]) if self.cm.reason[r, c] == NO_TRACTION else self.snap(xy)
+
+    def stitch(self, waypoints: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """`waypoints` with every leg that crosses blocked ground (a search track over a driftwood
+        log, a boulder ring) replaced by a route around it. Returns the points and, for each
+        original waypoint, its index in the result."""
+        pts = np.array([self.reachable(p) for p in np.asarray(waypoints, dtype=np.float64).reshape(-1, 2)])
+        pts = pts.reshape(-1, 2)
+        if len(pts) < 2:
+            return pts, np.arange(len(pts))
+        free = self.cm.segments_free(pts[:-1], pts[1:])
+        if bool(np.all(free)):
+            return pts, np.arange(len(pts))
+        out, where = [pts[:1]], [0]
+        for k in range(1, len(pts)):
+            if free[k - 1]:
+                out.append(pts[k : k + 1])
+            else:
+                out.append(self.route(out[-1][-1], pts[k])[1:])
+            where.append(where[-1] + len(out[-1]))
+        return np.vstack(out), np.array(where)
+
+    def route(self, start: np.ndarray, goal: np.ndarray) -> np.ndarray:
+        """Waypoints (k, 2) from `start` to `goal` (or to the nearest point of it a robot can reach)."""
+        goal = self.reachable(np.asarray(goal, dtype=np.float64))
+        a, b = self.snap(start), self.snap(goal)
+        if bool(self.cm.segments_free(a[None], b[None])[0]):
+            pts = np.vstack([a, b])
+        else:
+            self.calls += 1
+            try:
+                pts = plan_path(
+                    self.cm, a, b, self.profile, seed=self.seed * 100_003 + self.calls
+                ).waypoints_m
+            except PlanningError:
+                pts = np.vstack([a, b])  # no route on this map: head straight for it
+        if np.hypot(*(pts[-1] - goal)) > 1e-6:
+            pts = np.vstack([pts, goal])
+        return pts

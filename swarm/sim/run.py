@@ -1,0 +1,201 @@
+"""One mission run with the built-in policy, and the mission log it leaves.
+
+```python
+log = simulate(load_mission("missions/mine_clear.yaml"), seed=3)
+write_log(log, "reports/mine_clear-sim")   # trajectories.npz, events.jsonl, outcome.json
+```
+
+The log holds the trajectories as arrays sampled every `record_every_s` (time, x, y, heading,
+alive, phase per robot), every event the environment and the policy logged (launches, phase
+changes, detections, marks, losses with cause, relay breaks and repairs, takeovers, the
+clearance, recoveries), the outcome against the success criteria, and the losses by cause and
+phase. Files are written atomically; the same mission and seed give the same bytes.
+"""
+
+from __future__ import annotations
+
+import io
+import json
+from collections import Counter
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from swarm.files import atomic_path, write_text_atomic
+from swarm.mission.plan import MissionPlan
+from swarm.mission.schema import Mission
+from swarm.sim.env import SimConfig, SwarmEnv
+from swarm.sim.layout import PHASES, ROLES
+from swarm.sim.policy import ScriptedPolicy
+
+#: Seconds between trajectory samples in the log.
+RECORD_EVERY_S = 2.0
+#: The log's format version, written into outcome.json.
+LOG_VERSION = 1
+
+Progress = Callable[[float, float], None]
+
+
+@dataclass
+class MissionLog:
+    """A finished run: what happened, when and where."""
+
+    mission: str
+    map: str
+    seed: int
+    robots: list[str]
+    times_s: np.ndarray  # (k,)
+    xy_m: np.ndarray  # (k, n, 2) float32, NaN where the robot is not on the map
+    heading_rad: np.ndarray  # (k, n) float32
+    alive: np.ndarray  # (k, n) bool
+    phase: np.ndarray  # (k, n) int8 index into PHASES
+    events: list[dict]
+    outcome: dict
+    losses: list[dict]  # one per lost robot: robot, cause, phase, t_s, x_m, y_m
+    mines_m: np.ndarray  # (m, 2) the truth
+    mines_state: dict[str, list[bool]]  # detected, marked, exploded, cleared per mine
+    objects_m: np.ndarray  # (k, 2) detections and false alarms
+    object_mine: np.ndarray  # (k,) mine index or -1 for a false alarm
+    plan: MissionPlan | None = field(default=None, repr=False)
+    end_reasons: list[str | None] = field(default_factory=list)
+    role: np.ndarray | None = None  # (k, n) int8 index into ROLES: takeovers change it
+
+    def losses_by_cause(self) -> dict[str, int]:
+        return dict(sorted(Counter(x["cause"] for x in self.losses).items()))
+
+    def losses_by_phase(self) -> dict[str, dict[str, int]]:
+        out: dict[str, dict[str, int]] = {}
+        for x in self.losses:
+            out.setdefault(x["phase"], {}).setdefault(x["cause"], 0)
+            out[x["phase"]][x["cause"]] += 1
+        return out
+
+    def summary(self) -> dict:
+        """The JSON outcome: success, each criterion, losses, end states."""
+        ends = Counter(r or "active" for r in self.end_reasons)
+        return {
+            "version": LOG_VERSION,
+            "mission": self.mission,
+            "map": self.map,
+            "seed": self.seed,
+            "robots": len(self.robots),
+            "duration_s": float(self.times_s[-1]) if len(self.times_s) else 0.0,
+            "success": self.outcome["success"],
+            "criteria": self.outcome["criteria"],
+            "lost": len(self.losses),
+            "losses_by_cause": self.losses_by_cause(),
+            "losses_by_phase": self.losses_by_phase(),
+            "end_states": dict(sorted(ends.items())),
+            "mines": len(self.mines_m),
+            "mines_detected": int(np.sum(self.mines_state["detected"])) if len(self.mines_m) else 0,
+            "mines_cleared": int(np.sum(self.mines_state["cleared"])) if len(self.mines_m) else 0,
+            "false_alarms": int(np.sum(self.object_mine < 0)),
+        }
+
+
+def simulate(
+    mission: Mission,
+    seed: int = 0,
+    *,
+    plan: MissionPlan | None = None,
+    config: SimConfig | None = None,
+    record_every_s: float = RECORD_EVERY_S,
+    progress: Progress | None = None,
+    on_step: Callable[[SwarmEnv], None] | None = None,
+) -> MissionLog:
+    """Run the mission once with the scripted policy. `progress(t_s, time_limit_s)` is called as
+    simulated time passes; `on_step(env)` after every step (animation frames)."""
+    env = SwarmEnv(mission, action_mode="command", config=config, plan=plan)
+    policy = ScriptedPolicy(env)
+    env.reset(seed=seed)
+    n = env.n
+    times, xy, heading, alive, phase, role = [], [], [], [], [], []
+
+    def record() -> None:
+        on = env.alive & env.on_map
+        times.append(env.t_s)
+        xy.append(np.where(on[:, None], env.robot_state[:, :2], np.nan).astype(np.float32))
+        heading.append(env.robot_state[:, 2].astype(np.float32))
+        alive.append(env.alive.copy())
+        phase.append(env.phase.astype(np.int8))
+        role.append(env.role.astype(np.int8))
+
+    record()
+    next_record = record_every_s
+    while env.agents:
+        policy.update()
+        env.advance({})
+        if on_step is not None:
+            on_step(env)
+        if env.t_s + 1e-9 >= next_record or not env.agents:
+            record()
+            next_record += record_every_s
+        if progress is not None:
+            progress(env.t_s, env.time_limit_s)
+    losses = [
+        {
+            "robot": ev["robot"],
+            "cause": ev["cause"],
+            "phase": ev["phase"],
+            "t_s": ev["t_s"],
+            "x_m": ev["x_m"],
+            "y_m": ev["y_m"],
+        }
+        for ev in env.events
+        if ev["kind"] == "loss"
+    ]
+    mf = env.minefield
+    return MissionLog(
+        mission=mission.name or "mission",
+        map=env.beach.name,
+        seed=seed,
+        robots=list(env.possible_agents),
+        times_s=np.array(times),
+        xy_m=np.array(xy).reshape(len(times), n, 2),
+        heading_rad=np.array(heading).reshape(len(times), n),
+        alive=np.array(alive).reshape(len(times), n),
+        phase=np.array(phase).reshape(len(times), n),
+        role=np.array(role).reshape(len(times), n),
+        events=list(env.events),
+        outcome=env.outcome(),
+        losses=losses,
+        mines_m=mf.positions_m.copy(),
+        mines_state={k: getattr(mf, k).tolist() for k in ("detected", "marked", "exploded", "cleared")},
+        objects_m=env.objects_m.copy(),
+        object_mine=env.object_mine.copy(),
+        plan=env.plan,
+        end_reasons=list(env.end_reason),
+    )
+
+
+def write_log(log: MissionLog, out_dir: str | Path) -> dict[str, Path]:
+    """trajectories.npz, events.jsonl and outcome.json in `out_dir` (created), each atomically."""
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    paths = {name: out / name for name in ("trajectories.npz", "events.jsonl", "outcome.json")}
+    buf = io.BytesIO()
+    np.savez_compressed(
+        buf,
+        times_s=log.times_s,
+        xy_m=log.xy_m,
+        heading_rad=log.heading_rad,
+        alive=log.alive,
+        phase=log.phase,
+        role=log.role if log.role is not None else np.empty((0, len(log.robots)), np.int8),
+        roles=np.array(ROLES),
+        robots=np.array(log.robots),
+        phases=np.array(PHASES),
+        mines_m=log.mines_m,
+        objects_m=log.objects_m,
+        object_mine=log.object_mine,
+    )
+    with atomic_path(paths["trajectories.npz"]) as tmp:
+        Path(tmp).write_bytes(buf.getvalue())
+    write_text_atomic(
+        paths["events.jsonl"], "".join(json.dumps(ev, sort_keys=True) + "\n" for ev in log.events)
+    )
+    summary = log.summary() | {"mines_state": log.mines_state}
+    write_text_atomic(paths["outcome.json"], json.dumps(summary, indent=1, sort_keys=True) + "\n")
+    return paths

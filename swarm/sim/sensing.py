@@ -1,0 +1,421 @@
+"""Mine detection by the searching robots, with the mission's sensor model, and false alarms.
+
+Lateral-range curves (Koopman, *Search and Screening*, 1946/1980; Washburn, *Search and Detection*,
+4th ed., 2002, ch. 2): p(x) is the chance of detecting an object passed at closest distance x.
+
+- ``cookie_cutter``: p = 1 for |x| <= W/2, else 0 (definite range);
+- ``inverse_cube``: p = 1 - exp(-W^2 / (4 pi x^2)) (`swarm.planning.coverage.inverse_cube_lateral_range`);
+- ``random_search``: the cookie-cutter curve. Koopman's random-search formula is about tracks laid
+  without pattern, not about the sensor, so the sensor itself sees to a definite range;
+- a tabulated ``lateral_range`` (whatever the model): linear interpolation, 0 beyond the last range.
+
+Passes. A pass of robot i by mine j starts when the robot's track comes within `max_range_m` of the
+mine while the robot is sensing, and ends at the first step whose whole track segment stays beyond
+that range. Its closest point of approach x is the least distance from the mine to the robot's
+piecewise-linear track over the pass (each step's segment from the last position to the new one,
+so a fast robot cannot step over a mine). When the pass ends the mine is detected with
+probability p(x): one draw per pass. For a straight pass this is the lateral-range curve itself,
+and since passes of different tracks draw independently, parallel tracks at spacing S give
+``1 - prod_k (1 - p(x + kS))`` for a mine at offset x, whose average over x is the sweep-width
+coverage of `swarm.planning.coverage.detection_probability`: min(1, W/S) for the cookie cutter and
+erf(sqrt(pi) W / (2S)) for the inverse cube (exactly so there, since 1 - p is an exponential in
+1/x^2 and the product becomes Koopman's sum). The inverse-cube curve is cut at `max_range_m`, where
+p = `INVERSE_CUBE_FLOOR`: the cut tails hold W^2 / (2 pi R) = 1.8 % of W, so a lawnmower at S = W
+finds about 0.4 percentage points fewer mines than the erf formula.
+
+Inverse cube. Koopman derived the inverse-cube curve from a detection *rate* that falls with the
+cube of range, gamma(r) = c h / r^3; so the simulator integrates that rate along each step's track
+segment instead of drawing once per pass: a target mine within `max_range_m` of a sensing robot's
+segment is detected with probability 1 - exp(-W^2 / (8 pi) * integral ds / r^3), where the
+integral is along the segment (closed form). A whole straight pass at lateral distance x gives
+exactly p(x) = 1 - exp(-W^2 / (4 pi x^2)); several passes multiply their misses however close
+together they come (a single draw per pass would merge the look of two tracks 4 m apart into one
+pass near the track ends); a parked robot looks no more. (The rate per metre of track fixes the
+sweep width at the searcher's own speed, as Koopman's W is defined.) Tabulated curves, the
+cookie cutter and random search draw once per pass, as follows.
+
+A pass also ends, without a draw, when the mine stops being a target (set off, cleared, or found by
+another robot: a found mine is known to all and nobody searches for it again), and when the robot
+stops sensing: a robot that is lost mid-pass cannot report. `update` takes ``alive``: a robot that
+is alive but stops sensing (it left its tracks, it went to mark a mine) does draw, with the x of
+the part of the pass it looked at. Without ``alive`` every robot that stops sensing is taken as
+lost. A robot that stays within range of a mine for good (parked while sensing) never ends its
+pass, so it never draws for that mine.
+
+False alarms (clutter, debris: Washburn ch. 2 treats them as a Poisson process along the track):
+each step a sensing robot that moved ``s`` metres raises Poisson(false_alarms_per_km * s / 1000)
+of them, each at a point uniform in the disc of radius min(max_range_m, W) around it; with a
+clutter area, points outside it are redrawn (up to `FALSE_ALARM_TRIES` times), and alarms of a
+robot whose disc does not reach the area are skipped.
+
+Determinism: passes are kept sorted by key robot * m + mine, and every draw is taken in key order
+(then false alarms in robot order), so the same inputs and seed give the same detections.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+import shapely
+from scipy.spatial import cKDTree
+from shapely.geometry.base import BaseGeometry
+
+from swarm.mission import schema
+from swarm.planning.coverage import inverse_cube_lateral_range
+from swarm.sim.mines import MineField
+
+#: The inverse-cube curve is cut where p(x) falls below this.
+INVERSE_CUBE_FLOOR = 1e-3
+#: Lateral distances below this count as this (m): the inverse-cube rate is singular on the track.
+MIN_LATERAL_M = 0.05
+#: The screen for robots near a mine allows this much movement within a step (m).
+SCREEN_MARGIN_M = 5.0
+_NEIGHBOUR_BINS = np.array([(i, j) for i in (-1, 0, 1) for j in (-1, 0, 1)], dtype=np.int64)
+_BIN_STRIDE = 1 << 31
+#: Up to this many robot-mine pairs, the near pairs come from a dense distance matrix.
+DENSE_PAIRS = 100_000
+#: Rejection rounds for a false alarm inside the clutter area before it is dropped.
+FALSE_ALARM_TRIES = 64
+
+
+@dataclass
+class Detection:
+    """One report: a mine found (``mine`` its index in the MineField) or a false alarm (``mine`` -1)."""
+
+    robot: int
+    mine: int
+    xy: tuple[float, float]  # where the robot believes the object is
+    t_s: float
+
+    @property
+    def false_alarm(self) -> bool:
+        return self.mine < 0
+
+
+def lateral_range_curve(sensor: schema.Sensor) -> Callable[[np.ndarray], np.ndarray]:
+    """The sensor's p(x): detection probability of an object passed at closest distance |x|."""
+    if sensor.lateral_range is not None:
+        r = np.asarray(sensor.lateral_range.range_m, dtype=np.float64)
+        p = np.asarray(sensor.lateral_range.probability, dtype=np.float64)
+
+        def table(x: np.ndarray) -> np.ndarray:
+            return np.interp(np.abs(np.asarray(x, dtype=np.float64)), r, p, right=0.0)
+
+        return table
+    w = sensor.width_m
+    if sensor.model == "inverse_cube":
+
+        def inverse_cube(x: np.ndarray) -> np.ndarray:
+            return inverse_cube_lateral_range(np.abs(np.asarray(x, dtype=np.float64)), w)
+
+        return inverse_cube
+
+    def definite_range(x: np.ndarray) -> np.ndarray:
+        return (np.abs(np.asarray(x, dtype=np.float64)) <= w / 2.0).astype(np.float64)
+
+    return definite_range
+
+
+def max_range_m(sensor: schema.Sensor) -> float:
+    """The distance beyond which p(x) is 0 (below `INVERSE_CUBE_FLOOR` for the inverse cube, from
+    1 - exp(-W^2 / (4 pi R^2)) = floor)."""
+    if sensor.lateral_range is not None:
+        r, p = sensor.lateral_range.range_m, sensor.lateral_range.probability
+        last = max(k for k, pk in enumerate(p) if pk > 0)
+        return float(r[min(last + 1, len(r) - 1)])
+    w = sensor.width_m
+    if sensor.model == "inverse_cube":
+        return w / math.sqrt(-4.0 * math.pi * math.log1p(-INVERSE_CUBE_FLOOR))
+    return w / 2.0
+
+
+def _segment_distance(a: np.ndarray, b: np.ndarray, m: np.ndarray) -> np.ndarray:
+    """Distance from each point m to the segment a-b (rows)."""
+    v = b - a
+    w = m - a
+    vv = np.einsum("ij,ij->i", v, v)
+    t = np.einsum("ij,ij->i", w, v) / np.where(vv > 0, vv, 1.0)
+    t = np.clip(t, 0.0, 1.0)
+    e = w - t[:, None] * v
+    return np.sqrt(np.einsum("ij,ij->i", e, e))
+
+
+def _inverse_cube_look(a: np.ndarray, b: np.ndarray, m: np.ndarray) -> np.ndarray:
+    """Integral of ds / r^3 along each segment a-b (rows) for the point m: with x the distance from
+    m to the segment's line and s the coordinate along it, [s / (x^2 sqrt(x^2 + s^2))] between the
+    ends. A whole straight pass gives 2 / x^2."""
+    v = b - a
+    length = np.sqrt(np.einsum("ij,ij->i", v, v))
+    moving = length > 1e-12
+    u = v / np.where(moving, length, 1.0)[:, None]
+    w = m - a
+    s0 = -np.einsum("ij,ij->i", w, u)
+    s1 = s0 + length
+    x = np.maximum(np.abs(u[:, 0] * w[:, 1] - u[:, 1] * w[:, 0]), MIN_LATERAL_M)
+    x2 = x * x
+    out = (s1 / np.sqrt(x2 + s1 * s1) - s0 / np.sqrt(x2 + s0 * s0)) / x2
+    return np.where(moving, out, 0.0)
+
+
+class MineSensor:
+    """The search sensors of `n_robots` robots over one mine field (module docstring: passes,
+    closest approach, one draw per pass, false alarms)."""
+
+    def __init__(
+        self,
+        sensor: schema.Sensor,
+        minefield: MineField,
+        n_robots: int,
+        clutter_area: BaseGeometry | None = None,
+    ) -> None:
+        self.sensor = sensor
+        self.minefield = minefield
+        self.n = int(n_robots)
+        self.curve = lateral_range_curve(sensor)
+        self.range_m = max_range_m(sensor)
+        self.false_alarm_radius_m = min(self.range_m, sensor.width_m)
+        self.false_alarms_per_m = sensor.false_alarms_per_km / 1000.0
+        self.clutter_area = clutter_area
+        if clutter_area is not None:
+            shapely.prepare(clutter_area)
+        self._m = len(minefield)
+        self._tree = cKDTree(minefield.positions_m) if self._m else None
+        self._keys = np.empty(0, dtype=np.int64)  # robot * m + mine, sorted
+        self._xmin = np.empty(0)  # closest approach so far, metres
+        self._last_xy = np.full((self.n, 2), np.nan)  # position at the last step while sensing
+        self._screen_signature = -1
+        self._screen_keys = np.empty(0, dtype=np.int64)
+        #: Koopman's inverse-cube law is a detection *rate*: integrate it along the track instead
+        #: of drawing once per pass (module docstring, "Inverse cube").
+        self.continuous = sensor.model == "inverse_cube" and sensor.lateral_range is None
+
+    def reset(self) -> None:
+        """Forget passes in progress (a new episode)."""
+        self._keys = np.empty(0, dtype=np.int64)
+        self._xmin = np.empty(0)
+        self._last_xy[:] = np.nan
+        self._screen_signature = -1
+
+    @property
+    def passes_in_progress(self) -> int:
+        return len(self._keys)
+
+    def update(
+        self,
+        xy: np.ndarray,
+        sensing: np.ndarray,
+        distance_m: np.ndarray,
+        t_s: float,
+        rng: np.random.Generator,
+        *,
+        alive: np.ndarray | None = None,
+    ) -> list[Detection]:
+        """Advance every pass to the robots' new positions `xy` (n, 2); `sensing` (n,) robots whose
+        sensor is searching this step, `distance_m` (n,) how far each moved this step, `alive`
+        (n,) robots still in the mission (default: `sensing`). Returns the reports of this step:
+        mines found (robot, then mine order), then false alarms (robot order)."""
+        n = self.n
+        xy = np.asarray(xy, dtype=np.float64).reshape(-1, 2)
+        sensing = np.asarray(sensing, dtype=bool).reshape(-1)
+        distance_m = np.asarray(distance_m, dtype=np.float64).reshape(-1)
+        if len(xy) != n or len(sensing) != n or len(distance_m) != n:
+            raise ValueError(
+                f"sensing: expected xy ({n}, 2), sensing ({n},), distance_m ({n},); "
+                f"found {xy.shape}, {sensing.shape}, {distance_m.shape}"
+            )
+        sensing = sensing & np.all(np.isfinite(xy), axis=1)
+        can_report = sensing if alive is None else np.asarray(alive, dtype=bool).reshape(-1)
+
+        if self.continuous:
+            found = self._looks(xy, sensing, float(t_s), rng)
+        else:
+            found = self._passes(xy, sensing, can_report, float(t_s), rng)
+        self._last_xy[:] = np.nan
+        self._last_xy[sensing] = xy[sensing]
+        return found + self._false_alarms(xy, sensing, distance_m, float(t_s), rng)
+
+    def _looks(
+        self, xy: np.ndarray, sensing: np.ndarray, t_s: float, rng: np.random.Generator
+    ) -> list[Detection]:
+        """Inverse cube: each step, each target mine near a sensing robot's track segment is
+        detected with probability 1 - exp(-W^2/(8 pi) * integral of ds / r^3 along the segment)."""
+        m = self._m
+        field = self.minefield
+        target = field.active & ~field.detected
+        robots = np.flatnonzero(sensing)
+        if m == 0 or not len(robots) or not np.any(target):
+            return []
+        robots = robots[self._maybe_near(xy[robots], target)]
+        if not len(robots):
+            return []
+        start, end, r, j = self._segments_near(xy, robots, target)
+        if not len(r):
+            return []
+        order = np.lexsort((j, robots[r]))
+        r, j = r[order], j[order]
+        look = _inverse_cube_look(start[r], end[r], field.positions_m[j])
+        hazard = self.sensor.width_m**2 / (8.0 * math.pi) * look
+        hit = rng.random(len(r)) < -np.expm1(-hazard)
+        robot, mine = robots[r[hit]], j[hit]
+        _, first = np.unique(mine, return_index=True)  # one report per mine: the lowest robot
+        first.sort()
+        robot, mine = robot[first], mine[first]
+        field.detected[mine] = True
+        pos = field.positions_m
+        return [
+            Detection(int(i), int(k), (float(pos[k, 0]), float(pos[k, 1])), t_s)
+            for i, k in zip(robot, mine, strict=True)
+        ]
+
+    def _maybe_near(self, xy: np.ndarray, target: np.ndarray) -> np.ndarray:
+        """A quick screen: robots in a square bin (`range_m` + `SCREEN_MARGIN_M` wide) next to a
+        bin holding a target mine; only they can be within range (a step moves a robot far less
+        than the margin)."""
+        size = self.range_m + SCREEN_MARGIN_M
+        signature = int(np.count_nonzero(target))  # targets only ever go: a count tells a change
+        if self._screen_signature != signature:
+            mines = np.floor(self.minefield.positions_m[target] / size).astype(np.int64)
+            around = (mines[:, None, :] + _NEIGHBOUR_BINS[None, :, :]).reshape(-1, 2)
+            self._screen_keys = np.unique(around[:, 0] * _BIN_STRIDE + around[:, 1])
+            self._screen_signature = signature
+        keys = self._screen_keys
+        bins = np.floor(xy / size).astype(np.int64)
+        robot_keys = bins[:, 0] * _BIN_STRIDE + bins[:, 1]
+        at = np.minimum(np.searchsorted(keys, robot_keys), len(keys) - 1)
+        return keys[at] == robot_keys
+
+    def _segments_near(
+        self, xy: np.ndarray, robots: np.ndarray, target: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """This step's track segment of each of `robots` (from its last sensing position, or a
+        point where it just started) and the (segment, mine) pairs within range of a target mine."""
+        end = xy[robots]
+        start = self._last_xy[robots]
+        start = np.where(np.isfinite(start), start, end)
+        mid = 0.5 * (start + end)
+        half = 0.5 * np.sqrt(np.sum((end - start) ** 2, axis=1))
+        r, j = self._near_pairs(mid, self.range_m + float(half.max()))
+        keep = target[j]
+        return start, end, r[keep], j[keep]
+
+    def _near_pairs(self, points: np.ndarray, radius_m: float) -> tuple[np.ndarray, np.ndarray]:
+        """(point, mine) index pairs within `radius_m`: a dense distance check for small problems
+        (a few robots, a few tens of mines), the k-d trees beyond."""
+        mines = self.minefield.positions_m
+        if len(points) * len(mines) <= DENSE_PAIRS:
+            d2 = (points[:, None, 0] - mines[None, :, 0]) ** 2 + (points[:, None, 1] - mines[None, :, 1]) ** 2
+            r, j = np.nonzero(d2 <= radius_m * radius_m)
+            return r.astype(np.intp), j.astype(np.intp)
+        assert self._tree is not None
+        near = cKDTree(points).sparse_distance_matrix(self._tree, radius_m, output_type="ndarray")
+        return near["i"].astype(np.intp), near["j"].astype(np.intp)
+
+    def _passes(
+        self,
+        xy: np.ndarray,
+        sensing: np.ndarray,
+        can_report: np.ndarray,
+        t_s: float,
+        rng: np.random.Generator,
+    ) -> list[Detection]:
+        m = self._m
+        if m == 0:
+            return []
+        field = self.minefield
+        target = field.active & ~field.detected
+
+        # this step's track segments of the sensing robots and the target mines within range of them
+        robots = np.flatnonzero(sensing)
+        keys = np.empty(0, dtype=np.int64)
+        dist = np.empty(0)
+        if len(robots) and np.any(target):
+            start, end, r, j = self._segments_near(xy, robots, target)
+            d = _segment_distance(start[r], end[r], field.positions_m[j])
+            keep = d <= self.range_m
+            keys = robots[r[keep]].astype(np.int64) * m + j[keep]
+            dist = d[keep]
+            order = np.argsort(keys)
+            keys, dist = keys[order], dist[order]
+
+        # merge with the passes in progress
+        old_keys, old_x = self._keys, self._xmin
+        if len(old_keys) and len(keys):
+            where = np.minimum(np.searchsorted(old_keys, keys), len(old_keys) - 1)
+            going_on = old_keys[where] == keys
+            dist[going_on] = np.minimum(dist[going_on], old_x[where[going_on]])
+            ended = np.ones(len(old_keys), dtype=bool)
+            ended[where[going_on]] = False
+        else:
+            ended = np.ones(len(old_keys), dtype=bool)
+        self._keys, self._xmin = keys, dist
+
+        # passes that ended: one draw each, if the mine is still a target and the robot can report
+        end_keys, end_x = old_keys[ended], old_x[ended]
+        robot, mine = end_keys // m, end_keys % m
+        draws = target[mine] & can_report[robot]
+        robot, mine, end_x = robot[draws], mine[draws], end_x[draws]
+        if not len(robot):
+            return []
+        hit = rng.random(len(robot)) < self.curve(end_x)
+        robot, mine = robot[hit], mine[hit]
+        _, first = np.unique(mine, return_index=True)  # one report per mine: the lowest key
+        first.sort()
+        robot, mine = robot[first], mine[first]
+        field.detected[mine] = True
+        if len(self._keys):  # nobody keeps passing a mine that is now known
+            keep = ~field.detected[self._keys % m]
+            self._keys, self._xmin = self._keys[keep], self._xmin[keep]
+        pos = field.positions_m
+        return [
+            Detection(int(i), int(k), (float(pos[k, 0]), float(pos[k, 1])), t_s)
+            for i, k in zip(robot, mine, strict=True)
+        ]
+
+    def _false_alarms(
+        self,
+        xy: np.ndarray,
+        sensing: np.ndarray,
+        distance_m: np.ndarray,
+        t_s: float,
+        rng: np.random.Generator,
+    ) -> list[Detection]:
+        if self.false_alarms_per_m <= 0:
+            return []
+        robots = np.flatnonzero(sensing & (distance_m > 0))
+        if not len(robots):
+            return []
+        counts = rng.poisson(self.false_alarms_per_m * distance_m[robots])
+        who = np.repeat(robots, counts)
+        if not len(who):
+            return []
+        centre = xy[who]
+        radius = self.false_alarm_radius_m
+        area = self.clutter_area
+        if area is None:
+            pts = centre + _in_disc(rng, len(who), radius)
+        else:
+            pts = np.full((len(who), 2), np.nan)
+            pending = np.flatnonzero(shapely.distance(area, shapely.points(centre)) < radius)
+            for _ in range(FALSE_ALARM_TRIES):
+                if not len(pending):
+                    break
+                cand = centre[pending] + _in_disc(rng, len(pending), radius)
+                inside = shapely.intersects_xy(area, cand[:, 0], cand[:, 1])
+                pts[pending[inside]] = cand[inside]
+                pending = pending[~inside]
+        return [
+            Detection(int(i), -1, (float(p[0]), float(p[1])), t_s)
+            for i, p in zip(who, pts, strict=True)
+            if np.isfinite(p[0])
+        ]
+
+
+def _in_disc(rng: np.random.Generator, k: int, radius: float) -> np.ndarray:
+    """k points uniform in the disc of `radius` around the origin (radius sqrt(U) for uniform area)."""
+    u = rng.random((k, 2))
+    rho = radius * np.sqrt(u[:, 0])
+    theta = 2.0 * math.pi * u[:, 1]
+    return np.column_stack([rho * np.cos(theta), rho * np.sin(theta)])

@@ -1,0 +1,239 @@
+"""The swarm under attrition, through the whole environment: losses at the rate the hazard model
+promises, relays that break and heal, tasks taken over, mines found as the sensor model says."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy import stats
+from tiny_missions import write_mission
+
+from swarm.mission.load import load_mission
+from swarm.sim.env import SwarmEnv
+from swarm.sim.policy import ScriptedPolicy
+from swarm.sim.run import simulate
+
+#: Hazards that take nobody: for tests that isolate one mechanism.
+QUIET = {
+    "attrition": {"mtbf_h": 1.0e6},
+    "surf": {"damage_h50_m": 10.0},
+    "immobilization": {"per_km": 0.0},
+    "rocks": {"damage_per_km": 0.0, "collision_damage_probability": 0.0},
+    "comms": {"shadowing_sigma_db": 0.0},
+}
+#: A short-range radio (about 30 m with the 3 dB fade margin) so the small beach needs a relay chain.
+SHORT_RADIO = {"tx_power_dbm": 0.0, "rx_sensitivity_dbm": -70.0, "fade_margin_db": 3.0}
+RELAY_TASK = {"type": "relay", "source": "relay_source", "sinks": ["relay_sink"], "radio": SHORT_RADIO}
+
+
+def _run(env: SwarmEnv, policy: ScriptedPolicy, until_s: float) -> None:
+    while env.agents and env.t_s < until_s - 1e-9:
+        policy.update()
+        env.advance({})
+
+
+def test_random_failures_follow_the_exponential_survival_law(tmp_path) -> None:
+    """MTBF 0.05 h (180 s), 600 robots released together: survivors after T = 150 s must match
+    exp(-T / MTBF) within a 99.9% binomial interval."""
+    hazards = {**QUIET, "attrition": {"mtbf_h": 0.05}}
+    path = write_mission(
+        tmp_path,
+        swarm={"count": 600},
+        launch={"platform": "by_hand", "points": ["launch_1", "launch_2"], "offshore_m": 20, "interval_s": 0},
+        hazards=hazards,
+    )
+    env = SwarmEnv(load_mission(path), action_mode="wheels")
+    env.reset(seed=11)
+    still = {a: np.zeros(3, np.float32) for a in env.agents}
+    t_end = 150.0
+    while env.t_s < t_end - 1e-9:
+        env.advance({a: still[a] for a in env.agents})
+    causes = {ev["cause"] for ev in env.events if ev["kind"] == "loss"}
+    assert causes == {"failure"}
+    survivors = int(env.alive.sum())
+    p = math.exp(-t_end / (0.05 * 3600))
+    lo, hi = stats.binom.interval(0.999, 600, p)
+    assert lo <= survivors <= hi, (survivors, 600 * p)
+
+
+def _relay_env(tmp_path, count: int, interval_s: float = 2.0, **hazards: object) -> SwarmEnv:
+    path = write_mission(
+        tmp_path,
+        swarm={"count": count},
+        launch={
+            "platform": "by_hand",
+            "points": ["launch_1", "launch_2"],
+            "offshore_m": 20,
+            "interval_s": interval_s,
+        },
+        tasks=[RELAY_TASK],
+        hazards={**QUIET, **hazards},
+        phases={
+            "sea_transit": {"time_limit_s": 300},
+            "surf_crossing": {"time_limit_s": 300},
+            "beach_operations": {"time_limit_s": 600},
+            "return_to_sea": {"enabled": False},
+        },
+    )
+    return SwarmEnv(load_mission(path), action_mode="command")
+
+
+def test_a_lost_relay_breaks_the_link_and_a_spare_repairs_it(tmp_path) -> None:
+    """Two relays and a spare launched last (every robot relays, so a spare already ashore could
+    bridge the gap by itself): the first relay is lost as soon as both relays are at their posts."""
+    env = _relay_env(tmp_path, 3, interval_s=100.0)
+    policy = ScriptedPolicy(env)
+    env.reset(seed=3)
+    relays = [r.id for r in env.plan.robots if r.role == "relay"]
+    assert len(relays) == 2  # the short radio needs a chain
+    posts = [env.agent_index[r] for r in relays]
+    while not (env.relay_up and env.routes.done()[posts].all()):
+        policy.update()
+        env.advance({})
+    assert "relay_connected" in [ev["kind"] for ev in env.events]
+    env.lose(relays[0])
+    _run(env, policy, env.t_s + 10.0)
+    kinds = [ev["kind"] for ev in env.events]
+    assert "relay_break" in kinds, "losing a relay of a chain without slack must break the link"
+    _run(env, policy, env.t_s + 400.0)
+    takers = [ev for ev in env.events if ev["kind"] == "takeover" and ev["role"] == "relay"]
+    assert [ev["robot"] for ev in takers] == ["robot_2"]  # the spare, now a relay
+    assert env.role[2] == 2
+    assert env.relay_up
+    assert kinds.index("relay_break") < [ev["kind"] for ev in env.events].index("relay_repair")
+
+
+def test_nobody_takes_over_what_nobody_heard_about(tmp_path) -> None:
+    """Jammed from the start: the loss is never heard of, so no spare moves."""
+    env = _relay_env(tmp_path, 5, comms={"shadowing_sigma_db": 0.0, "cutoff_s": 0.0})
+    policy = ScriptedPolicy(env)
+    env.reset(seed=3)
+    _run(env, policy, 200.0)
+    env.lose(next(r.id for r in env.plan.robots if r.role == "relay"))
+    _run(env, policy, 400.0)
+    assert not [ev for ev in env.events if ev["kind"] == "takeover"]
+
+
+def test_a_lost_robots_landing_zone_is_taken_over(tmp_path) -> None:
+    path = write_mission(tmp_path, swarm={"count": 4}, hazards=QUIET)
+    env = SwarmEnv(load_mission(path), action_mode="command")
+    policy = ScriptedPolicy(env)
+    env.reset(seed=0)
+    lander = next(r for r in env.plan.robots if r.role == "landing")
+    i = env.agent_index[lander.id]
+    _run(env, policy, 60.0)
+    assert env.on_map[i]
+    env.lose(lander.id)
+    _run(env, policy, env.time_limit_s + 1)
+    takers = [ev for ev in env.events if ev["kind"] == "takeover"]
+    assert len(takers) == 1 and takers[0]["role"] == "landing"
+    assert env.outcome()["criteria"]["landing"]["value"] == 1.0
+
+
+def test_a_lost_searchers_track_is_finished_by_a_spare(tmp_path) -> None:
+    search = {
+        "type": "search",
+        "area": "search_beach",
+        "sensor": {"model": "cookie_cutter", "sweep_width_m": 4.0},
+        "robots": 1,
+        "mark": False,
+    }
+    path = write_mission(tmp_path, swarm={"count": 2}, tasks=[search], hazards=QUIET)
+    env = SwarmEnv(load_mission(path), action_mode="command")
+    policy = ScriptedPolicy(env)
+    env.reset(seed=0)
+    searcher = next(r for r in env.plan.robots if r.role == "search")
+    i = env.agent_index[searcher.id]
+    while not env.routes.in_track()[i]:
+        policy.update()
+        env.advance({})
+    _run(env, policy, env.t_s + 60.0)
+    left = env.routes.remaining_track(i)
+    env.lose(searcher.id)
+    _run(env, policy, env.t_s + 20.0)
+    (take,) = [ev for ev in env.events if ev["kind"] == "takeover"]
+    j = env.agent_index[take["robot"]]
+    assert take["role"] == "search" and env.role[j] == 1
+    np.testing.assert_allclose(env.routes.points[env.routes.end[j] - len(left) : env.routes.end[j]], left)
+
+
+def test_mines_found_match_the_sensor_model(tmp_path) -> None:
+    """Inverse-cube sensor over a dense field, no marking and no triggering. Koopman's inverse-cube
+    law is a detection rate c/r^3 whose straight pass gives p(x) = 1 - exp(-W^2/(4 pi x^2)), so a
+    mine is missed by the planned tracks with probability exp(-W^2/(8 pi) * sum of ds/r^3 along
+    them) (integrated here numerically, at 5 cm). The count found must match the expectation within
+    4 standard deviations of the Poisson-binomial plus 3% of the mines for path-following."""
+    width, spacing = 3.0, 4.0
+    search = {
+        "type": "search",
+        "area": "search_beach",
+        "sensor": {"model": "inverse_cube", "sweep_width_m": width},
+        "track_spacing_m": spacing,
+        "mark": False,
+    }
+    hazards = {**QUIET, "mines": {"count": 600, "trigger_probability": 0.0}}
+    phases = {
+        "sea_transit": {"time_limit_s": 300},
+        "surf_crossing": {"time_limit_s": 300},
+        "beach_operations": {"time_limit_s": 1500},
+        "return_to_sea": {"enabled": False},
+    }
+    path = write_mission(tmp_path, swarm={"count": 6}, tasks=[search], hazards=hazards, phases=phases)
+    log = simulate(load_mission(path), seed=5)
+    assert not log.losses
+    step = 0.05
+    samples = []
+    for sp in log.plan.search:
+        for run in sp.tracks:
+            for line in run:
+                k = max(2, int(line.length / step))
+                samples.append(
+                    np.asarray(
+                        [line.interpolate(d).coords[0] for d in (np.arange(k) + 0.5) * line.length / k]
+                    )
+                )
+    pts = np.vstack(samples)
+    mines = log.mines_m
+    look = np.zeros(len(mines))
+    for chunk in np.array_split(np.arange(len(pts)), 40):
+        r = np.hypot(mines[:, None, 0] - pts[None, chunk, 0], mines[:, None, 1] - pts[None, chunk, 1])
+        look += (step / np.maximum(r, 0.05) ** 3).sum(axis=1)
+    p = -np.expm1(-(width**2) / (8 * math.pi) * look)
+    found = int(np.sum(log.mines_state["detected"]))
+    sd = math.sqrt(float(np.sum(p * (1 - p))))
+    assert abs(found - p.sum()) <= 4 * sd + 0.03 * len(mines), (found, p.sum(), sd)
+    assert found / len(mines) == pytest.approx(log.summary()["criteria"]["detection"]["value"])
+
+
+def test_marked_mines_are_cleared_together_at_the_set_time(tmp_path) -> None:
+    """Markers loiter on the mines they found and set them off at clearance.at_s; the policy has
+    moved everyone else out of the standoff by then, so nobody else is caught in a blast."""
+    search = {
+        "type": "search",
+        "area": "search_beach",
+        "sensor": {"model": "cookie_cutter", "sweep_width_m": 4.0},
+        "mark": True,
+        "clearance": {"at_s": 700.0, "standoff_m": 8.0},
+    }
+    hazards = {**QUIET, "mines": {"count": 4, "trigger_probability": 0.0}}
+    phases = {
+        "sea_transit": {"time_limit_s": 300},
+        "surf_crossing": {"time_limit_s": 300},
+        "beach_operations": {"time_limit_s": 600},
+        "return_to_sea": {"enabled": False},
+    }
+    path = write_mission(tmp_path, swarm={"count": 8}, tasks=[search], hazards=hazards, phases=phases)
+    log = simulate(load_mission(path), seed=2)
+    (clear,) = [ev for ev in log.events if ev["kind"] == "clearance"]
+    assert clear["t_s"] == 700.0
+    marks = [ev for ev in log.events if ev["kind"] == "mark"]
+    expended = [ev for ev in log.events if ev["kind"] == "expended"]
+    assert marks, "the search must find and mark some mines for this test to mean anything"
+    assert len(expended) == clear["markers"] >= 1
+    assert all(ev["t_s"] == 700.0 for ev in expended)
+    cleared = np.flatnonzero(log.mines_state["cleared"])
+    assert sorted(cleared.tolist()) == sorted(ev["mine"] for ev in expended if ev["mine"] >= 0)
+    assert not [x for x in log.losses if x["cause"] == "blast"]
+    assert log.end_reasons.count("expended") == len(expended)

@@ -1,0 +1,294 @@
+"""Mine detection: straight passes reproduce each lateral-range curve, a lawnmower at spacing S
+reproduces the sweep-width coverage formulas, false alarms follow their Poisson rate, and mines
+already found or gone are not reported again.
+
+Statistical checks use 4-sigma bounds (binomial or Poisson): a correct implementation fails one
+with chance < 1e-4; the seeds are fixed, so the outcome is reproducible."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from shapely.geometry import box
+
+from swarm.mission.schema import LateralRange, Sensor
+from swarm.planning.coverage import detection_probability
+from swarm.sim.mines import MineField
+from swarm.sim.sensing import (
+    INVERSE_CUBE_FLOOR,
+    Detection,
+    MineSensor,
+    lateral_range_curve,
+    max_range_m,
+)
+
+COOKIE = Sensor(model="cookie_cutter", sweep_width_m=4.0)
+CUBE = Sensor(model="inverse_cube", sweep_width_m=2.0)
+RANDOM = Sensor(model="random_search", sweep_width_m=4.0)
+TABLE = Sensor(
+    model="inverse_cube",
+    lateral_range=LateralRange(range_m=[0.0, 1.0, 3.0, 4.0, 6.0], probability=[0.9, 0.8, 0.3, 0.0, 0.0]),
+)
+
+
+def _binomial_ok(hits: int, trials: int, p: float) -> bool:
+    return abs(hits / trials - p) <= 4.0 * math.sqrt(p * (1.0 - p) / trials) + 1e-12
+
+
+def _drive(
+    sensor: MineSensor,
+    start: np.ndarray,
+    velocity: np.ndarray,
+    steps: int,
+    rng: np.random.Generator,
+    sensing: np.ndarray | None = None,
+) -> list[Detection]:
+    """Move every robot `steps` times by `velocity` (n, 2) per step, sensing all the way."""
+    n = len(start)
+    sensing = np.ones(n, bool) if sensing is None else sensing
+    step_m = np.linalg.norm(velocity, axis=1)
+    found: list[Detection] = []
+    xy = start.copy()
+    for k in range(steps + 1):
+        found += sensor.update(xy, sensing, step_m if k else np.zeros(n), float(k), rng)
+        xy = xy + velocity
+    return found
+
+
+# the curves ------------------------------------------------------------------------------------
+
+
+def test_lateral_range_curves_and_their_ranges() -> None:
+    x = np.array([0.0, 1.0, 1.999, 2.0, 2.001, -1.5, 10.0])
+    np.testing.assert_array_equal(lateral_range_curve(COOKIE)(x), [1, 1, 1, 1, 0, 1, 0])
+    np.testing.assert_array_equal(lateral_range_curve(RANDOM)(x), lateral_range_curve(COOKIE)(x))
+    assert max_range_m(COOKIE) == max_range_m(RANDOM) == 2.0
+    w = CUBE.width_m
+    with np.errstate(divide="ignore"):
+        koopman = 1.0 - np.exp(-(w**2) / (4 * math.pi * x**2))
+    np.testing.assert_allclose(lateral_range_curve(CUBE)(x), koopman)
+    r = max_range_m(CUBE)
+    assert lateral_range_curve(CUBE)(np.array([r]))[0] == pytest.approx(INVERSE_CUBE_FLOOR, rel=1e-9)
+    assert r / w == pytest.approx(8.92, abs=0.01)  # R / W = 1 / sqrt(-4 pi ln(1 - 1e-3))
+    table = lateral_range_curve(TABLE)
+    np.testing.assert_allclose(
+        table(np.array([0.0, 0.5, 2.0, -2.0, 3.5, 4.0, 7.0])), [0.9, 0.85, 0.55, 0.55, 0.15, 0, 0]
+    )
+    assert max_range_m(TABLE) == 4.0  # p is 0 from 4 m on
+
+
+# straight passes ---------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    ("sensor", "offsets"),
+    [
+        (COOKIE, [0.0, 1.5, 1.99, 2.3]),
+        (CUBE, [0.3, 1.0, 2.0, 4.0]),
+        (TABLE, [0.5, 2.0, 3.5, 4.5]),
+    ],
+    ids=["cookie_cutter", "inverse_cube", "tabulated"],
+)
+def test_straight_passes_reproduce_the_lateral_range_curve(sensor: Sensor, offsets: list[float]) -> None:
+    """Many robots, each passing its own mine at a lateral offset x: found fraction = p(x)."""
+    per_offset = 1500
+    x = np.repeat(offsets, per_offset)
+    m = len(x)
+    lane = 100.0 * np.arange(m)  # lanes far apart: each robot only ever sees its own mine
+    mines = np.column_stack([np.zeros(m), lane])
+    field = MineField(mines)
+    ms = MineSensor(sensor, field, m)
+    reach = max_range_m(sensor) + 1.0
+    start = np.column_stack([np.full(m, -reach), lane + x])
+    step = 0.37  # not a divisor of anything: closest approach falls between steps
+    found = _drive(
+        ms, start, np.tile([step, 0.0], (m, 1)), math.ceil(2 * reach / step), np.random.default_rng(1)
+    )
+    assert all(d.robot == d.mine for d in found)  # robot k passes mine k only
+    assert all(d.xy == (0.0, float(lane[d.mine])) for d in found)
+    hit = np.zeros(m, bool)
+    hit[[d.mine for d in found]] = True
+    np.testing.assert_array_equal(hit, field.detected)
+    p = lateral_range_curve(sensor)(np.asarray(offsets))
+    for k, pk in enumerate(p):
+        got = int(hit[k * per_offset : (k + 1) * per_offset].sum())
+        assert _binomial_ok(got, per_offset, float(pk)), (offsets[k], got / per_offset, pk)
+
+
+def test_a_fast_robot_cannot_step_over_a_mine() -> None:
+    """One 20 m step past a mine 1 m abeam: the closest approach is on the segment, not at its ends."""
+    field = MineField(np.array([[0.0, 0.0]]))
+    ms = MineSensor(COOKIE, field, 1)
+    rng = np.random.default_rng(0)
+    assert ms.update(np.array([[-10.0, 1.0]]), np.ones(1, bool), np.zeros(1), 0.0, rng) == []
+    assert ms.update(np.array([[10.0, 1.0]]), np.ones(1, bool), np.array([20.0]), 1.0, rng) == []
+    assert ms.passes_in_progress == 1
+    found = ms.update(np.array([[30.0, 1.0]]), np.ones(1, bool), np.array([20.0]), 2.0, rng)
+    assert [(d.robot, d.mine, d.t_s) for d in found] == [(0, 0, 2.0)]
+
+
+# parallel tracks ---------------------------------------------------------------------------------
+
+
+def _truncated_sweep(sensor: Sensor, spacing: float) -> float:
+    """Expected found fraction for infinitely many tracks, the curve cut at max_range_m."""
+    p = lateral_range_curve(sensor)
+    r = max_range_m(sensor)
+    x = (np.arange(20000) + 0.5) / 20000 * spacing
+    k = np.arange(-math.ceil(r / spacing) - 1, math.ceil(r / spacing) + 2)
+    lateral = np.abs(x[:, None] + k[None, :] * spacing)
+    miss = np.prod(1.0 - np.where(lateral <= r, p(lateral), 0.0), axis=1)
+    return float(1.0 - miss.mean())
+
+
+@pytest.mark.parametrize(
+    ("sensor", "spacing", "model"),
+    [
+        (CUBE, 2.5, "inverse_cube"),
+        (CUBE, 1.5, "inverse_cube"),
+        (COOKIE, 5.0, "cookie_cutter"),
+        (COOKIE, 3.0, "cookie_cutter"),
+    ],
+)
+def test_a_lawnmower_reproduces_the_sweep_width_coverage(sensor: Sensor, spacing: float, model: str) -> None:
+    m = 4000
+    rng = np.random.default_rng(2)
+    side = 100.0
+    field = MineField(rng.uniform(0.0, side, size=(m, 2)))
+    r = max_range_m(sensor)
+    # one robot per track, tracks north-south at spacing S reaching well past the field on every side
+    tracks_x = np.arange(-r - spacing, side + r + spacing, spacing) + 0.123
+    n = len(tracks_x)
+    ms = MineSensor(sensor, field, n)
+    start = np.column_stack([tracks_x, np.full(n, -r - 1.0)])
+    _drive(ms, start, np.tile([0.0, 0.9], (n, 1)), math.ceil((side + 2 * r + 2) / 0.9), rng)
+    formula = detection_probability(model, sensor.width_m, spacing)
+    expected = _truncated_sweep(sensor, spacing)
+    # the cut at max_range_m costs the inverse cube a little, the cookie cutter nothing
+    assert expected == pytest.approx(formula, abs=0.01 if model == "inverse_cube" else 1e-9)
+    assert expected <= formula + 1e-9
+    found = int(field.detected.sum())
+    assert _binomial_ok(found, m, expected), (found / m, expected, formula)
+    assert abs(found / m - formula) <= 4.0 * math.sqrt(formula * (1 - formula) / m) + 0.01
+
+
+# false alarms ------------------------------------------------------------------------------------
+
+
+def test_false_alarms_follow_the_poisson_rate_along_the_track() -> None:
+    rate_per_km = 40.0
+    sensor = Sensor(model="inverse_cube", sweep_width_m=3.0, false_alarms_per_km=rate_per_km)
+    ms = MineSensor(sensor, MineField(np.empty((0, 2))), 50)
+    rng = np.random.default_rng(3)
+    n, steps, step = 50, 400, 1.5
+    start = np.column_stack([np.zeros(n), 1000.0 * np.arange(n)])
+    velocity = np.tile([step, 0.0], (n, 1))
+    alarms = []
+    xy = start.copy()
+    for k in range(1, steps + 1):
+        xy = xy + velocity
+        alarms += [(d, xy[d.robot].copy()) for d in ms.update(xy, np.ones(n, bool), np.full(n, step), k, rng)]
+    expected = rate_per_km * n * steps * step / 1000.0  # 1200
+    assert abs(len(alarms) - expected) < 4.0 * math.sqrt(expected)
+    assert all(d.mine == -1 and d.false_alarm for d, _ in alarms)
+    # uniform in the disc of radius min(max_range_m, W) = W around the robot: E[r^2] = R^2 / 2
+    radius = min(max_range_m(sensor), sensor.width_m)
+    r2 = np.array([np.sum((np.asarray(d.xy) - at) ** 2) for d, at in alarms]) / radius**2
+    assert r2.max() <= 1.0
+    assert abs(r2.mean() - 0.5) < 4.0 * math.sqrt(1.0 / 12.0 / len(r2))  # r^2 / R^2 ~ U(0, 1)
+
+
+def test_false_alarms_stay_in_the_clutter_area() -> None:
+    sensor = Sensor(model="cookie_cutter", sweep_width_m=4.0, false_alarms_per_km=100.0)
+    area = box(0.0, 0.0, 1e6, 1e6)
+    n = 40
+    ms = MineSensor(sensor, MineField(np.empty((0, 2))), n, clutter_area=area)
+    rng = np.random.default_rng(4)
+    # half the robots drive along the area's edge (half their disc inside), half 2.5 m outside it
+    y = np.where(np.arange(n) < n // 2, 0.0, -2.5)
+    base = np.column_stack([10.0 * np.arange(n), y])
+    alarms: list[Detection] = []
+    steps, step = 500, 1.0
+    for k in range(1, steps + 1):
+        alarms += ms.update(base + np.array([step * k, 0.0]), np.ones(n, bool), np.full(n, step), k, rng)
+    assert all(d.robot < n // 2 for d in alarms)  # the disc (radius 2 m) of the others misses the area
+    assert all(d.xy[1] >= 0.0 for d in alarms)
+    expected = 100.0 * (n // 2) * steps * step / 1000.0  # redrawn, not dropped: the full rate
+    assert abs(len(alarms) - expected) < 4.0 * math.sqrt(expected)
+
+
+# what is not reported ----------------------------------------------------------------------------
+
+
+def _lane_of_mines() -> MineField:
+    return MineField(np.column_stack([np.arange(5) * 10.0, np.zeros(5)]))
+
+
+def test_known_exploded_and_cleared_mines_are_not_reported() -> None:
+    field = _lane_of_mines()
+    field.detected[0] = True
+    field.exploded[1] = True
+    field.cleared[2] = True
+    ms = MineSensor(COOKIE, field, 2)
+    # two robots pass the lane together, 0.5 m to either side; the cookie cutter cannot miss
+    start = np.array([[-5.0, 0.5], [-5.0, -0.5]])
+    found = _drive(ms, start, np.tile([0.5, 0.0], (2, 1)), 130, np.random.default_rng(5))
+    assert sorted(d.mine for d in found) == [3, 4]  # once each, though both robots passed them
+    assert all(d.robot == 0 for d in found)  # same step: the lower robot index reports
+    np.testing.assert_array_equal(field.detected, [True, False, False, True, True])
+    # a second sweep finds nothing new
+    again = MineSensor(COOKIE, field, 1)
+    assert _drive(again, start[:1], np.array([[0.5, 0.0]]), 130, np.random.default_rng(6)) == []
+
+
+def test_a_robot_that_is_not_sensing_reports_nothing() -> None:
+    field = _lane_of_mines()
+    sensor = Sensor(model="cookie_cutter", sweep_width_m=4.0, false_alarms_per_km=500.0)
+    ms = MineSensor(sensor, field, 2)
+    start = np.array([[-5.0, 0.5], [-5.0, 0.5]])
+    sensing = np.array([False, True])
+    found = _drive(ms, start, np.tile([0.5, 0.0], (2, 1)), 130, np.random.default_rng(7), sensing)
+    assert found and all(d.robot == 1 for d in found)
+    field2 = _lane_of_mines()
+    ms2 = MineSensor(sensor, field2, 2)
+    none = _drive(ms2, start, np.tile([0.5, 0.0], (2, 1)), 130, np.random.default_rng(7), np.zeros(2, bool))
+    assert none == [] and not field2.detected.any()
+
+
+def test_a_robot_lost_mid_pass_cannot_report_but_one_that_stops_sensing_does() -> None:
+    rng = np.random.default_rng(8)
+    on, off = np.ones(1, bool), np.zeros(1, bool)
+    at = np.array([[0.0, 1.0]])  # 1 m abeam of the mine: p = 1 for the cookie cutter
+    lost = MineSensor(COOKIE, MineField(np.array([[0.0, 0.0]])), 1)
+    assert lost.update(at, on, np.zeros(1), 0.0, rng) == []
+    assert lost.update(at, off, np.zeros(1), 1.0, rng) == []  # default: stopped sensing = lost
+    assert lost.passes_in_progress == 0
+    assert lost.update(at + np.array([50.0, 0.0]), on, np.zeros(1), 2.0, rng) == []
+    stopped = MineSensor(COOKIE, MineField(np.array([[0.0, 0.0]])), 1)
+    stopped.update(at, on, np.zeros(1), 0.0, rng)
+    found = stopped.update(at, off, np.zeros(1), 1.0, rng, alive=np.ones(1, bool))
+    assert [(d.robot, d.mine) for d in found] == [(0, 0)]
+    dead = MineSensor(COOKIE, MineField(np.array([[0.0, 0.0]])), 1)
+    dead.update(at, on, np.zeros(1), 0.0, rng)
+    assert dead.update(at, off, np.zeros(1), 1.0, rng, alive=np.zeros(1, bool)) == []
+
+
+def test_same_inputs_and_seed_give_the_same_detections() -> None:
+    sensor = Sensor(model="inverse_cube", sweep_width_m=2.0, false_alarms_per_km=20.0)
+
+    def run(seed: int) -> list[Detection]:
+        layout = np.random.default_rng(0)
+        field = MineField(layout.uniform(0, 60, size=(300, 2)))
+        n = 30
+        ms = MineSensor(sensor, field, n, clutter_area=box(0, 0, 60, 60))
+        start = layout.uniform(0, 60, size=(n, 2))
+        heading = layout.uniform(0, 2 * math.pi, n)
+        velocity = 0.5 * np.column_stack([np.cos(heading), np.sin(heading)])
+        return _drive(ms, start, velocity, 120, np.random.default_rng(seed))
+
+    a, b, c = run(1), run(1), run(2)
+    assert len(a) > 20 and any(d.false_alarm for d in a) and any(not d.false_alarm for d in a)
+    assert a == b
+    assert a != c
