@@ -76,6 +76,7 @@ def _parser() -> argparse.ArgumentParser:
     _add_path_command(commands)
     _add_plan_command(commands)
     _add_simulate_command(commands)
+    _add_study_command(commands)
     schema = commands.add_parser("schema", help="print the mission file JSON Schema (for editors)")
     schema.set_defaults(handler=_cmd_schema)
     return parser
@@ -796,6 +797,97 @@ def _path_benchmark(args: argparse.Namespace, cm, profiles, start, goal) -> int:
         )
     print(_table(rows))
     print(f"wrote {export.path}: ompl_benchmark_statistics.py {export.path} -d bench.db (then Planner Arena)")
+    return 0
+
+
+# --- swarm study: Monte Carlo over seeds and parameter grids (swarm/studies) ----------------------------
+def _add_study_command(commands) -> None:
+    """`swarm study MISSION.yaml --runs N [--sweep KEY=VALUES ...] [--seed S] [--workers K]
+    [--backend local|ray] [--address ADDR] [--out DIR]`."""
+    st = commands.add_parser(
+        "study", help="run a mission many times over seeds and a parameter grid; success with intervals"
+    )
+    st.add_argument("mission", type=Path, metavar="MISSION.yaml")
+    st.add_argument("--runs", type=int, required=True, help="runs per parameter point")
+    st.add_argument(
+        "--sweep",
+        action="append",
+        default=[],
+        metavar="KEY=VALUES",
+        help="a mission key and its values: swarm.count=10:60:10 (start:stop:step) or "
+        "hazards.surf.wave_height_m=0.5,1,2 (repeatable: the study is their product)",
+    )
+    st.add_argument("--seed", type=int, default=0, help="study seed: run seeds come from it (default 0)")
+    st.add_argument(
+        "--workers", type=int, help="processes (local) or CPUs of a local Ray (default: all cores)"
+    )
+    st.add_argument("--backend", choices=("local", "ray"), default="local", help="where runs execute")
+    st.add_argument("--address", help="Ray cluster address (e.g. auto, ray://host:10001); --backend ray")
+    st.add_argument("--target", type=float, default=0.95, help="success probability to reach (default 0.95)")
+    st.add_argument(
+        "--confidence", type=float, default=0.95, help="confidence of the intervals (default 0.95)"
+    )
+    st.add_argument(
+        "--out",
+        type=Path,
+        metavar="DIR",
+        help="study folder (default: reports/<mission>-study/); run again with the same arguments to resume",
+    )
+    st.set_defaults(handler=_cmd_study)
+
+
+def _cmd_study(args: argparse.Namespace) -> int:
+    from tqdm import tqdm
+
+    from swarm.report.study_report import answer, study_rows, write_study_report
+    from swarm.studies.study import StudySpec, run_study
+    from swarm.studies.sweep import check_points, parse_sweeps
+
+    if args.runs < 1:
+        raise InputError("command line", "--runs", args.runs, "at least 1 run per point")
+    if args.seed < 0:
+        raise InputError("command line", "--seed", args.seed, "a seed >= 0")
+    if args.workers is not None and args.workers < 1:
+        raise InputError("command line", "--workers", args.workers, "at least 1")
+    if args.address is not None and args.backend != "ray":
+        raise InputError("command line", "--address", args.address, "--backend ray with it")
+    for option, value in (("--target", args.target), ("--confidence", args.confidence)):
+        if not 0.0 < value < 1.0:
+            raise InputError("command line", option, value, "a probability strictly between 0 and 1")
+    if not args.mission.is_file():
+        raise InputError("command line", "MISSION.yaml", str(args.mission), "an existing mission YAML file")
+    sweeps = parse_sweeps(args.sweep)
+    out = args.out or Path("reports") / f"{args.mission.stem}-study"
+    if out.exists() and not out.is_dir():
+        raise InputError("command line", "--out", str(out), "a folder (this is a file)")
+    spec = StudySpec(str(args.mission), args.runs, sweeps, args.seed, args.target, args.confidence)
+    check_points(spec.mission_path, sweeps)  # every point valid before anything starts
+
+    with tqdm(desc="study", unit="run", file=sys.stderr, dynamic_ncols=True) as bar:
+
+        def progress(done: int, total: int) -> None:
+            if bar.total is None:
+                bar.total = total
+                bar.initial = bar.n = done
+                bar.refresh()
+            else:
+                bar.update(done - bar.n)
+
+        table, summary = run_study(
+            spec, out, backend=args.backend, workers=args.workers, address=args.address, progress=progress
+        )
+    from swarm.mission.load import load_mission
+
+    beach = load_mission(args.mission).beach_map
+    paths = write_study_report(out, table, summary, beach)
+    print(answer(summary))
+    print()
+    print(_table(study_rows(summary)))
+    if summary["losses_by_cause"]:
+        print()
+        print("losses: " + ", ".join(f"{c} {n}" for c, n in summary["losses_by_cause"].items()))
+    names = ["results.parquet", "summary.json", *(p.name for p in paths.values())]
+    print(f"wrote {', '.join(names)} in {out}")
     return 0
 
 

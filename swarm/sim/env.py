@@ -448,7 +448,7 @@ class SwarmEnv(ParallelEnv):
         power = np.where(moving, res.power_w, 0.0) + np.where(at_sea, self.swim_power_w, 0.0)
         power = power + np.where(self.alive & (self.phase != WAITING), hotel, 0.0)
         self.energy_wh -= power * dt / 3600.0
-        self._flip(res.wave_hits & moving)
+        self._flip(res.wave_hits & moving, res.wave_height_m)
         self.routes.advance(self.robot_state[:, :2], moving)
         self._update_phases(res.in_surf & moving)
         self._release()
@@ -472,6 +472,62 @@ class SwarmEnv(ParallelEnv):
         self._score_prev = score
         self._sample_tracks()
         return terminated, truncate, float(reward)
+
+    def fast_forward(self) -> int:
+        """Skip ahead while every robot is off the map (waiting on the platform or swimming in
+        offshore), up to one step before the next release or arrival: one stride instead of many
+        identical steps. Only memoryless hazards act at sea (random failure, radio dropout), so a
+        stride of k steps draws losses with exactly the probability k steps would; a loss is
+        logged at the end of the stride. Returns the steps skipped (0 when a robot is on the map
+        or the next event is within two steps). Runners use it (`simulate`); `step` never does."""
+        if not self.agents or (self.alive & self.on_map).any():
+            return 0
+        dt = self.config.dt_s
+        waiting = self.alive & (self.phase == WAITING)
+        swimming = self.alive & (self.phase != WAITING) & ~self.on_map
+        events = [self.release_s[waiting], self.arrive_s[swimming]]
+        if self.clearance is not None and not self.cleared:
+            events.append(np.array([self.clearance.at_s]))
+        upcoming = np.concatenate(events)
+        if not len(upcoming):
+            return 0
+        k = math.floor((float(upcoming.min()) - self.t_s) / dt + 1e-9) - 1
+        k = min(k, self.max_steps - self.steps - 1)
+        if k < 2:
+            return 0
+        stride = k * dt
+        hotel = self.mission.hazards.battery.hotel_power_w
+        at_sea = swimming & (self.phase == SEA)
+        self.energy_wh -= np.where(at_sea, self.swim_power_w + hotel, 0.0) * stride / 3600.0
+        self.sea_time_s += np.where(at_sea, stride, 0.0)
+        self.steps += k
+        self.t_s = self.steps * dt
+        n = self.n
+        inp = hazards.HazardInputs(
+            t_s=self.t_s,
+            dt_s=stride,
+            alive=self.alive & (self.phase != WAITING),
+            at_sea=at_sea,
+            xy=self.robot_state[:, :2],
+            terrain=self.terrain_now,
+            distance_m=np.zeros(n),
+            slip=np.zeros(n),
+            driving=np.zeros(n, bool),
+            wave_hits=np.zeros(n, bool),
+            obstacle_hit=np.full(n, -1),
+            energy_wh=self.energy_wh,
+            sea_time_s=self.sea_time_s,
+            surf_time_s=self.surf_time_s,
+            isolated_s=np.zeros(n),
+            radio_ok=self.radio_ok,
+        )
+        losses = self.hazard_model.step(inp, self.rngs["hazards"])
+        self.radio_ok &= ~losses.radio_dropped
+        lost = losses.lost & self.alive
+        for i in np.flatnonzero(lost):
+            self._lose(int(i), hazards.CAUSES[losses.cause[i]])
+        self._pending_terminated |= lost
+        return k
 
     def _finish(self, terminated: np.ndarray, truncate: bool) -> None:
         """End the step: truncate everyone at the time limit, drop finished agents for good."""
@@ -594,10 +650,13 @@ class SwarmEnv(ParallelEnv):
         if self.t_s >= self.mission.phases.beach_end_s and self.mission.phases.return_to_sea.enabled:
             self._global_phase("return_to_sea")
 
-    def _flip(self, hits: np.ndarray) -> None:
+    def _flip(self, hits: np.ndarray, height_m: np.ndarray) -> None:
+        """Breakers turn robots over: flip_probability for a full breaker, in proportion to the
+        local breaker height below it."""
         if not hits.any():
             return
-        p = self.mission.hazards.surf.flip_probability
+        surf = self.mission.hazards.surf
+        p = surf.flip_probability * np.minimum(1.0, height_m / max(surf.wave_height_m, 1e-9))
         draws = self.rngs["waves"].random(self.n)
         flips = hits & (draws < p)
         self.inverted ^= flips
@@ -684,6 +743,7 @@ class SwarmEnv(ParallelEnv):
             slip=self.slip,
             driving=driving,
             wave_hits=res.wave_hits & self.on_map,
+            wave_height_m=res.wave_height_m,
             obstacle_hit=np.where(self.on_map, res.obstacle_hit, -1),
             energy_wh=self.energy_wh,
             sea_time_s=self.sea_time_s,

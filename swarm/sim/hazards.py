@@ -153,6 +153,8 @@ class HazardInputs:
     surf_time_s: np.ndarray  # time spent in the surf zone so far
     isolated_s: np.ndarray  # time since the robot last had a radio link to anyone
     radio_ok: np.ndarray  # bool: its radio still works (False after a dropout)
+    #: local breaker height of each hit (m); None: every breaker is hazards.surf.wave_height_m
+    wave_height_m: np.ndarray | None = None
 
 
 @dataclass
@@ -259,6 +261,7 @@ class HazardModel:
         self._failure_per_s = 1.0 / (hazards.attrition.mtbf_h * 3600.0)
         self._dropout_per_s = hazards.comms.dropout_per_h / 3600.0
         self._p_wave = hazards.surf.impact_damage_probability()
+        self._surf = hazards.surf
         self._p_collision = hazards.rocks.collision_damage_probability
         self._isolation_s = hazards.comms.isolation_limit_s
         self._sea_limit_s = phases.sea_transit.time_limit_s
@@ -277,6 +280,14 @@ class HazardModel:
         view = self._stuck_s.view()
         view.flags.writeable = False
         return view
+
+    def wave_damage_probability(self, inp: HazardInputs) -> np.ndarray | float:
+        """Chance one hit disables a robot: the logistic of `SurfHazard` at the local breaker
+        height where the physics reports it (smaller in the swash), else at the offshore one."""
+        if inp.wave_height_m is None:
+            return self._p_wave
+        surf = self._surf
+        return 1.0 / (1.0 + np.exp(-(inp.wave_height_m - surf.damage_h50_m) / surf.damage_spread_m))
 
     def rates_per_s(self, inp: HazardInputs) -> np.ndarray:
         """(n, 4) continuous hazard rates, per second, columns `RATE_CAUSES`: failure, immobilized,
@@ -334,7 +345,9 @@ class HazardModel:
         cause[cont] = _RATE_CAUSE_INDEX[which[cont]]
         collided = (new_boulder & (u[:, _U_BOULDER] < self._p_collision)) | hidden
         cause[collided] = _CAUSE["rock"]
-        cause[alive & inp.wave_hits & (u[:, _U_WAVE] < self._p_wave)] = _CAUSE["wave_impact"]
+        cause[alive & inp.wave_hits & (u[:, _U_WAVE] < self.wave_damage_probability(inp))] = _CAUSE[
+            "wave_impact"
+        ]
         cause[mine >= 0] = _CAUSE["mine"]
         dropped = cont & (which == _DROPOUT_COLUMN) & (cause == _CAUSE["cut_off"])
         return Losses(cause=cause, mine=mine, radio_dropped=dropped)

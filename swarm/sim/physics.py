@@ -51,7 +51,9 @@ What is modelled, and where it comes from:
    0.05-0.15 slopes), and the cap keeps run-off channels and rivers inland out of the surf.
    `shoreward` is the unit uphill gradient of the elevation smoothed by a Gaussian of
    `SHOREWARD_SMOOTHING_CELLS` cells, +y (north) where that vanishes. Breaker crests pass at t =
-   wave_phase_s + k T; a robot in the surf at the start of the substep a crest falls in is hit.
+   wave_phase_s + k T; a robot in the surf at the start of the substep a crest falls in is hit,
+   by a breaker of the local height min(H_b, 0.78 h) (`PhysicsStep.wave_height_m`): across the surf
+   zone the breakers lose height with the depth, so a robot in the swash takes small ones.
 5. Obstacles. A substep that would put a robot's centre in an impassable cell (a mode with
    `passable: false`: boulders, driftwood) other than the one it is in is undone for x, y; the
    body velocities u, v are zeroed and the new heading and yaw rate kept (it can still turn in
@@ -192,6 +194,7 @@ class PhysicsStep:
     terrain: np.ndarray  # (n,) int class index of the cell under each robot at the end (-1 inactive)
     submersion: np.ndarray  # (n,) buoyancy_fraction of that cell's mode (0 land .. 1 deep water)
     in_surf: np.ndarray  # (n,) bool: in the surf zone at the end
+    wave_height_m: np.ndarray  # (n,) local breaker height of the step's hits, m (0 without one)
     wave_hits: np.ndarray  # (n,) bool: a breaker crest passed over the robot in the surf zone
     obstacle_hit: np.ndarray  # (n,) int class of an impassable cell the robot ran into, -1 none
 
@@ -260,7 +263,7 @@ class Physics:
         props[_CURRENT_X] = np.where(surf, sea.longshore_current_mps, 0.0).ravel()
         props[_WAVE_X] = (amplitude * self.shoreward[..., 0]).ravel()
         props[_WAVE_Y] = (amplitude * self.shoreward[..., 1]).ravel()
-        props[_SURF] = surf.ravel()
+        props[_SURF] = np.where(surf, height, 0.0).ravel()  # the local breaker height (0: not surf)
         self._props = np.ascontiguousarray(props.T)
 
     @staticmethod
@@ -329,6 +332,7 @@ class Physics:
             terrain=np.full(n, -1, dtype=np.intp),
             submersion=np.zeros(n),
             in_surf=np.zeros(n, dtype=bool),
+            wave_height_m=np.zeros(n),
             wave_hits=np.zeros(n, dtype=bool),
             obstacle_hit=np.full(n, -1, dtype=np.intp),
         )
@@ -361,6 +365,7 @@ class Physics:
         distance = np.zeros(m)
         slip = np.zeros(m)
         hits = np.zeros(m, dtype=bool)
+        hit_height = np.zeros(m)
         obstacle = np.full(m, -1, dtype=np.intp)
         mean_omega = 0.5 * (omega[:, 0] + omega[:, 1])
         wrench = np.zeros((m, 3))
@@ -425,6 +430,7 @@ class Physics:
             crests_next = sea.crests_by(t_s + dt_s * (k + 1) / n_sub, wave_phase_s)
             if crests_next > crests:
                 hits |= props[_SURF] > 0.0
+                np.maximum(hit_height, props[_SURF], out=hit_height)
             crests = crests_next
             s, cell = new, new_cell
 
@@ -442,5 +448,6 @@ class Physics:
             submersion=coef[_BUOY],
             in_surf=props[_SURF] > 0.0,
             wave_hits=hits,
+            wave_height_m=hit_height,
             obstacle_hit=obstacle,
         )

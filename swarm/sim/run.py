@@ -61,6 +61,7 @@ class MissionLog:
     plan: MissionPlan | None = field(default=None, repr=False)
     end_reasons: list[str | None] = field(default_factory=list)
     role: np.ndarray | None = None  # (k, n) int8 index into ROLES: takeovers change it
+    completed_s: float | None = None  # mission time when every criterion was first met
 
     def losses_by_cause(self) -> dict[str, int]:
         return dict(sorted(Counter(x["cause"] for x in self.losses).items()))
@@ -82,6 +83,7 @@ class MissionLog:
             "seed": self.seed,
             "robots": len(self.robots),
             "duration_s": float(self.times_s[-1]) if len(self.times_s) else 0.0,
+            "completed_s": self.completed_s,
             "success": self.outcome["success"],
             "criteria": self.outcome["criteria"],
             "lost": len(self.losses),
@@ -124,9 +126,14 @@ def simulate(
 
     record()
     next_record = record_every_s
+    completed_s: float | None = None
     while env.agents:
+        if env.fast_forward():  # nobody on the map yet: one stride through the sea transit
+            next_record = max(next_record, env.t_s)
         policy.update()
         env.advance({})
+        if completed_s is None and env.score.outcome()["success"]:
+            completed_s = env.t_s
         if on_step is not None:
             on_step(env)
         if env.t_s + 1e-9 >= next_record or not env.agents:
@@ -167,6 +174,7 @@ def simulate(
         object_mine=env.object_mine.copy(),
         plan=env.plan,
         end_reasons=list(env.end_reason),
+        completed_s=completed_s,
     )
 
 

@@ -231,10 +231,19 @@ def test_frame_stride_gives_a_bounded_animation():
 
 def test_gif_animation_of_a_run(tiny_path, tmp_path):
     out = tmp_path / "run.gif"
+    visited: list[int] = []
+
     with Animator(out) as anim:
-        log = simulate(load_mission(tiny_path), seed=1, on_step=anim.on_step)
-    steps = round(float(log.times_s[-1]) / 0.5)
-    assert anim.frames == -(-steps // 10)  # every 10th step (5 s), and the last step
+
+        def on_step(env) -> None:
+            visited.append(env.steps)
+            anim.on_step(env)
+
+        log = simulate(load_mission(tiny_path), seed=1, on_step=on_step)
+    assert visited[-1] == round(float(log.times_s[-1]) / 0.5)
+    # every 10th step (5 s) the run went through (it strides over the swim in), and the last step
+    expected = sum(1 for s in visited if s % 10 == 0) + (visited[-1] % 10 != 0)
+    assert anim.frames == expected
     with Image.open(out) as gif:
         assert gif.n_frames == anim.frames > 1
         assert gif.size[0] == FRAME_WIDTH_PX

@@ -1,0 +1,484 @@
+"""Figures of a Monte Carlo study, each as PNG bytes for the self-contained study report: success
+probability against the swept parameter (with Wilson intervals, the target and the required value),
+losses by phase and cause, where robots were lost over the map, and time to success per point.
+
+Inputs are the study's `summary` (summary.json as a dict) and its results table
+(`swarm.studies.table`, one row per run). Losses by cause use the animation's colours
+(`swarm.sim.render.CAUSE_COLOURS`); series use the Okabe-Ito palette plus a marker and line style
+each, so no figure relies on colour alone. Every function returns None when there is nothing to show.
+"""
+
+from __future__ import annotations
+
+import io
+import math
+from collections.abc import Sequence
+
+import numpy as np
+import pyarrow as pa
+import pyarrow.compute as pc
+from matplotlib import colormaps
+from matplotlib.colors import ListedColormap
+from matplotlib.lines import Line2D
+from matplotlib.ticker import MaxNLocator
+
+from swarm.report.map_figure import figure_size, plot_map
+from swarm.report.sim_figures import CAUSE_MARKERS
+from swarm.report.style import OKABE_ITO, new_figure, plt
+from swarm.sim.hazards import CAUSES
+from swarm.sim.layout import PHASES
+from swarm.sim.render import cause_colour
+from swarm.world.beachmap import BeachMap
+
+PNG_DPI = 110
+#: One style per series (a value of the second swept key): colour, marker, line style.
+SERIES_STYLES = [
+    (OKABE_ITO["blue"], "o", "-"),
+    (OKABE_ITO["vermillion"], "s", "--"),
+    (OKABE_ITO["green"], "^", "-."),
+    (OKABE_ITO["orange"], "D", ":"),
+    (OKABE_ITO["purple"], "v", "-"),
+    (OKABE_ITO["sky"], "P", "--"),
+    (OKABE_ITO["black"], "X", "-."),
+]
+#: Units a key's name carries (`hazards.surf.wave_height_m`), for axis labels.
+KEY_UNITS = (
+    ("_per_km", "per km"),
+    ("_per_ha", "per ha"),
+    ("_per_h", "per h"),
+    ("_per_s", "per s"),
+    ("_mps", "m/s"),
+    ("_deg", "deg"),
+    ("_rad", "rad"),
+    ("_m", "m"),
+    ("_s", "s"),
+    ("_h", "h"),
+)
+#: Keys whose values are counts of something nameable.
+KEY_NOUNS = {"swarm.count": "robots", "mines.count": "mines"}
+#: Above this many losses the loss map shows only the heat map (markers would hide it).
+MAX_LOSS_MARKERS = 200
+#: Loss heat map colours: inferno (perceptually uniform, colour-blind safe) without its near-black
+#: end, which would read as boulders or deep water on the map.
+HEAT_CMAP = ListedColormap(colormaps["inferno"](np.linspace(0.25, 0.95, 256)), name="losses")
+#: Small multiples of the completion-time figure per row.
+PANELS_PER_ROW = 4
+
+
+def _png(fig) -> bytes:
+    """The figure as PNG bytes without a timestamp (same study, same bytes); closes it."""
+    try:
+        buf = io.BytesIO()
+        fig.savefig(
+            buf, format="png", dpi=PNG_DPI, bbox_inches="tight", pad_inches=0.08, metadata={"Software": None}
+        )
+        return buf.getvalue()
+    finally:
+        plt.close(fig)
+
+
+def _label(name: str) -> str:
+    return name.replace("_", " ")
+
+
+def key_unit(key: str) -> str:
+    """The unit a swept key's name implies ('robots' for swarm.count, 'm' for ..._m), or ''."""
+    if key in KEY_NOUNS:
+        return KEY_NOUNS[key]
+    for suffix, unit in KEY_UNITS:
+        if key.endswith(suffix):
+            return unit
+    return ""
+
+
+def key_label(key: str) -> str:
+    """An axis label for a swept key: its path and its unit."""
+    unit = key_unit(key)
+    return f"{key} ({unit})" if unit else key
+
+
+def format_value(value: object) -> str:
+    """A swept value as people read it: integers without a point, floats with up to 4 digits."""
+    if isinstance(value, float):
+        return f"{value:.4g}"
+    return str(value)
+
+
+def point_label(params: dict) -> str:
+    """A point's parameters in one short line ('all runs' when nothing is swept)."""
+    if not params:
+        return "all runs"
+    return ", ".join(f"{k} = {format_value(v)}" for k, v in params.items())
+
+
+def short_label(params: dict) -> str:
+    """A point's parameters for a tick label: the last part of each key path ('count = 10,
+    wave_height_m = 0.5'), whole paths where two would read the same."""
+    names = [k.rsplit(".", 1)[-1] for k in params]
+    if not params or len(set(names)) < len(names):
+        return point_label(params)
+    return ", ".join(f"{n} = {format_value(v)}" for n, v in zip(names, params.values(), strict=True))
+
+
+def swept_keys(summary: dict) -> list[str]:
+    """The swept keys in sweep order, or those of the points' params when `sweeps` is absent."""
+    keys = list(summary.get("sweeps") or {})
+    if not keys:
+        for p in summary.get("points", []):
+            keys += [k for k in p.get("params", {}) if k not in keys]
+    return keys
+
+
+def x_key(summary: dict) -> str | None:
+    """The key on the success figure's x axis: the key the required value is for when it is swept
+    (the question the study answers), else the first swept key; None when nothing is swept."""
+    keys = swept_keys(summary)
+    required = (summary.get("required") or {}).get("key")
+    if required in keys:
+        return required
+    return keys[0] if keys else None
+
+
+def _numeric(values: Sequence[object]) -> bool:
+    return all(isinstance(v, int | float) and not isinstance(v, bool) for v in values)
+
+
+def _x_positions(summary: dict, key: str | None) -> tuple[dict, list[str] | None]:
+    """Each x value's position, and tick labels when the values are not numbers (categories)."""
+    if key is None:
+        return {None: 0.0}, ["all runs"]
+    values = list((summary.get("sweeps") or {}).get(key) or [])
+    for p in summary.get("points", []):
+        v = p.get("params", {}).get(key)
+        if v not in values:
+            values.append(v)
+    if _numeric(values):
+        return {v: float(v) for v in values}, None
+    return {v: float(i) for i, v in enumerate(values)}, [format_value(v) for v in values]
+
+
+def success_png(summary: dict) -> bytes | None:
+    """Success probability against the swept key with Wilson interval error bars, one line per value
+    of the other swept keys, the target as a horizontal line and the required value marked; None
+    without points."""
+    points = summary.get("points") or []
+    if not points:
+        return None
+    key = x_key(summary)
+    positions, ticks = _x_positions(summary, key)
+    others = [k for k in swept_keys(summary) if k != key]
+    series: dict[tuple, list[dict]] = {}
+    for p in points:
+        params = p.get("params", {})
+        series.setdefault(tuple(params.get(k) for k in others), []).append(p)
+
+    fig, ax = new_figure(7.5, 4.2, layout="constrained")
+    xs_all = sorted(set(positions.values()))
+    gap = min(np.diff(xs_all)) if len(xs_all) > 1 else 1.0
+    for i, (combo, pts) in enumerate(series.items()):
+        colour, marker, style = SERIES_STYLES[i % len(SERIES_STYLES)]
+        pts = sorted(pts, key=lambda p: positions[p.get("params", {}).get(key)])
+        dodge = 0.04 * gap * (i - (len(series) - 1) / 2)  # keeps overlapping error bars apart
+        x = np.array([positions[p.get("params", {}).get(key)] for p in pts]) + dodge
+        rate = np.array([p["success_rate"] for p in pts], dtype=float)
+        lo = np.clip(rate - np.array([p["wilson_low"] for p in pts], dtype=float), 0.0, None)
+        hi = np.clip(np.array([p["wilson_high"] for p in pts], dtype=float) - rate, 0.0, None)
+        label = ", ".join(f"{k} = {format_value(v)}" for k, v in zip(others, combo, strict=True))
+        ax.errorbar(
+            x,
+            rate,
+            yerr=[lo, hi],
+            color=colour,
+            marker=marker,
+            ls=style,
+            ms=5,
+            capsize=3,
+            lw=1.4,
+            label=label or "P(success)",
+            zorder=5,
+        )
+    target = summary.get("target")
+    if target is not None:
+        ax.axhline(target, color=OKABE_ITO["black"], ls="--", lw=1.0, label=f"target {target:g}", zorder=3)
+    required = summary.get("required") or {}
+    value = required.get("value")
+    if value is not None and required.get("key") == key and value in positions:
+        ax.axvline(
+            positions[value],
+            color=OKABE_ITO["green"],
+            ls=":",
+            lw=2.0,
+            label=f"required: {format_value(value)}" + (f" {key_unit(key)}" if key_unit(key) else ""),
+            zorder=4,
+        )
+    ax.set_ylim(-0.02, 1.05)
+    ax.set_ylabel("P(success) (fraction of runs)")
+    ax.set_xlabel(key_label(key) if key is not None else "")
+    if ticks is not None:
+        ax.set_xticks(sorted(positions.values()), ticks)
+        if len(ticks) == 1:
+            ax.set_xlim(-1.0, 1.0)
+    elif key is not None and all(isinstance(v, int) for v in positions):
+        ax.xaxis.set_major_locator(MaxNLocator(integer=True))
+    confidence = summary.get("confidence", 0.95)
+    runs = summary.get("runs_per_point")
+    per = f", {runs} runs per point" if runs else ""
+    ax.set_title(f"success probability with {confidence:.0%} Wilson intervals{per}", fontsize=9)
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
+    return _png(fig)
+
+
+def ordered_phases(names: Sequence[str]) -> list[str]:
+    """Phases in mission order (`PHASES`), unknown ones after, sorted."""
+    present = set(names)
+    return [p for p in PHASES if p in present] + sorted(present - set(PHASES))
+
+
+def ordered_causes(names: Sequence[str]) -> list[str]:
+    """Causes in `CAUSES` order (as every loss table), unknown ones after, sorted."""
+    present = set(names)
+    return [c for c in CAUSES if c in present] + sorted(present - set(CAUSES))
+
+
+def pooled_losses_by_phase(summary: dict) -> dict[str, dict[str, int]]:
+    """Losses by phase then cause over every run: the summary's own, else summed over its points."""
+    pooled = summary.get("losses_by_phase")
+    if pooled:
+        return pooled
+    out: dict[str, dict[str, int]] = {}
+    for p in summary.get("points", []):
+        for phase, causes in (p.get("losses_by_phase") or {}).items():
+            for cause, n in causes.items():
+                out.setdefault(phase, {})[cause] = out.setdefault(phase, {}).get(cause, 0) + n
+    return out
+
+
+def total_runs(summary: dict) -> int:
+    """Runs in the study: the summary's count, else the sum over its points."""
+    return int(summary.get("runs") or sum(p.get("runs", 0) for p in summary.get("points", [])))
+
+
+def losses_png(summary: dict) -> bytes | None:
+    """Mean robots lost per run, stacked by cause: by the phase they were in (all runs pooled, left)
+    and by parameter point (right: how losses change with the swept values); None without losses."""
+    by_phase = pooled_losses_by_phase(summary)
+    runs = total_runs(summary)
+    if not runs or not any(n for causes in by_phase.values() for n in causes.values()):
+        return None
+    points = [p for p in summary.get("points", []) if p.get("runs")]
+    causes = ordered_causes([c for cs in by_phase.values() for c, n in cs.items() if n])
+    phases = ordered_phases([p for p, cs in by_phase.items() if any(cs.values())])
+    extra: dict[str, str] = {}
+    colours = {c: cause_colour(c, extra) for c in causes}
+
+    width = 3.0 + 0.8 * len(phases) + 0.55 * len(points)
+    fig, (left, right) = new_figure(
+        max(7.5, min(width, 14.0)),
+        3.8,
+        ncols=2,
+        sharey=True,
+        layout="constrained",
+        gridspec_kw={"width_ratios": [max(len(phases), 2), max(len(points), 2)]},
+    )
+    bottom = np.zeros(len(phases))
+    point_bottom = np.zeros(len(points))
+    for cause in causes:
+        mean = np.array([by_phase.get(p, {}).get(cause, 0) / runs for p in phases])
+        left.bar(
+            [_label(p) for p in phases],
+            mean,
+            bottom=bottom,
+            color=colours[cause],
+            edgecolor="white",
+            lw=0.6,
+            label=_label(cause),
+        )
+        bottom += mean
+        per_point = np.array([(p.get("losses_by_cause") or {}).get(cause, 0) / p["runs"] for p in points])
+        right.bar(
+            np.arange(len(points)),
+            per_point,
+            bottom=point_bottom,
+            color=colours[cause],
+            edgecolor="white",
+            lw=0.6,
+        )
+        point_bottom += per_point
+    left.set_xlabel("phase when lost")
+    left.set_ylabel("robots lost per run (mean)")
+    left.set_title(f"by phase, all {runs} runs", fontsize=9)
+    left.grid(axis="x", visible=False)
+    plt.setp(left.get_xticklabels(), rotation=20, ha="right")
+    key = x_key(summary)
+    labels = [
+        format_value(p.get("params", {}).get(key))
+        if len(swept_keys(summary)) == 1
+        else short_label(p["params"])
+        for p in points
+    ]
+    right.set_xticks(np.arange(len(points)), labels)
+    right.set_xlabel(key_label(key) if len(swept_keys(summary)) == 1 else "parameter point")
+    if len(swept_keys(summary)) != 1:
+        plt.setp(right.get_xticklabels(), rotation=30, ha="right", fontsize=7)
+    right.set_title("by parameter point", fontsize=9)
+    right.grid(axis="x", visible=False)
+    fig.legend(title="cause", loc="outside right center", fontsize=7, title_fontsize=7, frameon=False)
+    fig.suptitle("robots lost per run, by cause", fontsize=10)
+    return _png(fig)
+
+
+def loss_points(table: pa.Table) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Every loss in the table: x (m), y (m) and cause, as arrays (empty without losses)."""
+    if table.num_rows == 0 or "losses" not in table.column_names:
+        return np.zeros(0), np.zeros(0), np.zeros(0, dtype=object)
+    flat = pc.list_flatten(table.column("losses"))
+    if len(flat) == 0:
+        return np.zeros(0), np.zeros(0), np.zeros(0, dtype=object)
+    flat = flat.combine_chunks() if isinstance(flat, pa.ChunkedArray) else flat
+    x = flat.field("x_m").to_numpy(zero_copy_only=False).astype(float)
+    y = flat.field("y_m").to_numpy(zero_copy_only=False).astype(float)
+    cause = np.array(flat.field("cause").to_pylist(), dtype=object)
+    return x, y, cause
+
+
+def loss_bin_m(beach_map: BeachMap) -> float:
+    """Heat-map cell size: 5 m on beaches up to 250 m across, 10 m beyond (and never below a map cell)."""
+    extent = max(beach_map.width_m, beach_map.height_m)
+    return max(5.0 if extent <= 250.0 else 10.0, float(beach_map.cell_m))
+
+
+def loss_map_png(table: pa.Table, beach_map: BeachMap | None) -> bytes | None:
+    """Where robots were lost over all runs: a 2D histogram over the map (empty cells transparent)
+    and, when there are few, a marker per loss by cause (`CAUSE_MARKERS`, as the simulation report);
+    None without a map or without losses."""
+    x, y, cause = loss_points(table)
+    if beach_map is None or not len(x):
+        return None
+    x0, y0, x1, y1 = beach_map.bounds_m
+    bin_m = loss_bin_m(beach_map)
+    xedges = np.append(np.arange(x0, x1, bin_m), x1)
+    yedges = np.append(np.arange(y0, y1, bin_m), y1)
+    counts, _, _ = np.histogram2d(x, y, bins=[xedges, yedges])
+    outside = len(x) - int(counts.sum())
+
+    fig_w, fig_h = figure_size(x1 - x0, y1 - y0, 3)
+    fig, ax = new_figure(fig_w + 1.0, fig_h, layout="constrained")
+    plot_map(beach_map, None, ax=ax)
+    legend = ax.get_legend()
+    handles = list(legend.legend_handles) if legend is not None else []
+    if legend is not None:
+        legend.remove()
+    mesh = ax.pcolormesh(
+        xedges,
+        yedges,
+        np.ma.masked_equal(counts.T, 0),
+        cmap=HEAT_CMAP,
+        alpha=0.8,
+        edgecolors="none",
+        zorder=8,
+    )
+    bar = fig.colorbar(mesh, ax=ax, shrink=0.85, pad=0.01)
+    bar.set_label(f"losses per cell ({bin_m:g} m × {bin_m:g} m)")
+    bar.locator = MaxNLocator(integer=True)
+    bar.update_ticks()
+    if len(x) <= MAX_LOSS_MARKERS:
+        extra: dict[str, str] = {}
+        for c in ordered_causes(list(set(cause))):
+            mask = cause == c
+            colour = cause_colour(c, extra)
+            marker = CAUSE_MARKERS.get(c, "o")
+            ax.scatter(
+                x[mask], y[mask], s=22, marker=marker, c=colour, edgecolors="white", linewidths=0.5, zorder=10
+            )
+            handles.append(
+                Line2D(
+                    [], [], ls="", marker=marker, ms=5, color=colour, mec="white", label=f"lost: {_label(c)}"
+                )
+            )
+    ax.set_xlim(x0, x1)
+    ax.set_ylim(y0, y1)
+    runs = table.num_rows
+    note = f"; {outside} outside the map" if outside else ""
+    ax.set_title(f"where robots were lost: {len(x)} losses in {runs} runs{note}", fontsize=9)
+    fig.legend(handles=handles, loc="outside lower center", ncol=5, fontsize=7, frameon=False)
+    return _png(fig)
+
+
+def completion_times(table: pa.Table) -> dict[int, np.ndarray]:
+    """Each point's completion times (s) of the runs that met every criterion (NaN dropped)."""
+    if table.num_rows == 0:
+        return {}
+    point = table.column("point").to_numpy()
+    done = table.column("completed_s").to_numpy(zero_copy_only=False).astype(float)
+    return {int(p): done[(point == p) & np.isfinite(done)] for p in np.unique(point)}
+
+
+def completion_png(table: pa.Table, summary: dict) -> bytes | None:
+    """Time to success per parameter point: a histogram of `completed_s` of the completed runs in one
+    small panel per point (shared axes, median marked); a note when no run completed; None without
+    runs."""
+    times = completion_times(table)
+    if not times:
+        return None
+    params = {p.get("index"): p.get("params", {}) for p in summary.get("points", [])}
+    runs = {
+        int(p): int(n)
+        for p, n in zip(*np.unique(table.column("point").to_numpy(), return_counts=True), strict=True)
+    }
+    every = np.concatenate(list(times.values()))
+    if not len(every):
+        fig, ax = new_figure(6.0, 2.0, layout="constrained")
+        ax.axis("off")
+        ax.text(
+            0.5,
+            0.5,
+            f"no run met every criterion ({table.num_rows} runs): no completion times",
+            ha="center",
+            va="center",
+            fontsize=10,
+        )
+        return _png(fig)
+    lo, hi = float(every.min()) / 60.0, float(every.max()) / 60.0
+    if hi - lo < 1e-9:
+        lo, hi = lo - 0.5, hi + 0.5
+    bins = np.linspace(lo, hi, min(30, max(6, int(math.sqrt(len(every))) + 2)))
+    n = len(times)
+    ncols = min(n, PANELS_PER_ROW)
+    nrows = math.ceil(n / ncols)
+    fig, axes = new_figure(
+        max(6.0, 3.0 * ncols), 0.4 + 2.2 * nrows, nrows=nrows, ncols=ncols, sharex=True, sharey=True,
+        layout="constrained", squeeze=False,
+    )  # fmt: skip
+    colour = OKABE_ITO["blue"]
+    for ax, (p, t) in zip(axes.flat, times.items(), strict=False):
+        title = short_label(params.get(p, {"point": p}))
+        if len(t):
+            ax.hist(t / 60.0, bins=bins, histtype="stepfilled", color=colour, alpha=0.35, lw=0)
+            ax.hist(t / 60.0, bins=bins, histtype="step", color=colour, lw=1.4)
+            ax.axvline(float(np.median(t)) / 60.0, color=OKABE_ITO["vermillion"], ls="--", lw=1.2)
+        else:
+            ax.text(0.5, 0.5, "none completed", transform=ax.transAxes, ha="center", va="center", fontsize=8)
+        ax.set_title(f"{title}: {len(t)} of {runs.get(p, 0)} completed", fontsize=8)
+        ax.yaxis.set_major_locator(MaxNLocator(integer=True))
+    for i, ax in enumerate(axes.flat):
+        if i >= n:
+            ax.axis("off")
+        elif i + ncols >= n:  # the lowest panel of its column: it carries the x axis
+            ax.xaxis.set_tick_params(labelbottom=True)
+            ax.set_xlabel("time to success (min)")
+    for ax in axes[:, 0]:
+        ax.set_ylabel("runs")
+    fig.legend(
+        handles=[
+            plt.Rectangle(
+                (0, 0), 1, 1, facecolor=colour, alpha=0.35, edgecolor=colour, label="completed runs"
+            ),
+            Line2D([], [], color=OKABE_ITO["vermillion"], ls="--", label="median"),
+        ],
+        loc="outside lower center",
+        ncol=2,
+        fontsize=7,
+        frameon=False,
+    )
+    fig.suptitle("time until every success criterion was met, completed runs only", fontsize=10)
+    return _png(fig)

@@ -1,0 +1,85 @@
+"""Where a study's runs execute: a local process pool (the default: no setup, all cores), or Ray
+(`pip install surf-swarm[ray]`) on a running cluster or a local one it starts.
+
+Both take the same `RunTask`s and yield the same rows, as runs finish (in any order); the seeds are
+in the tasks, so which backend, how many workers and the order make no difference to the table.
+Processes, not threads: the simulator is numpy-heavy Python, and OMPL (planning a point) holds the
+GIL. Local workers start with the "forkserver" method, which never forks a process with threads.
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+import os
+from collections.abc import Iterator, Sequence
+from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+
+from swarm.errors import InputError, SwarmError
+from swarm.studies.runner import RunTask, run_task
+
+BACKENDS = ("local", "ray")
+
+
+def default_workers() -> int:
+    """All the cores this process may use."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # not on Linux
+        return max(1, os.cpu_count() or 1)
+
+
+def run_local(tasks: Sequence[RunTask], workers: int) -> Iterator[dict]:
+    """Rows as runs finish on `workers` processes (1: in this process, in order)."""
+    if workers <= 1:
+        for task in tasks:
+            yield run_task(task)
+        return
+    context = multiprocessing.get_context("forkserver")
+    pending = list(reversed(tasks))
+    with ProcessPoolExecutor(max_workers=workers, mp_context=context) as pool:
+        running: set[Future] = set()
+        try:
+            while pending or running:
+                while pending and len(running) < 2 * workers:  # a short queue: a kill loses little
+                    running.add(pool.submit(run_task, pending.pop()))
+                finished, running = wait(running, return_when=FIRST_COMPLETED)
+                for future in finished:
+                    yield future.result()
+        except BaseException:  # Ctrl-C or a failed run: stop now, do not wait for the queue
+            pool.shutdown(wait=False, cancel_futures=True)
+            raise
+
+
+def run_ray(tasks: Sequence[RunTask], workers: int | None, address: str | None) -> Iterator[dict]:
+    """Rows as runs finish on a Ray cluster (`address`, e.g. "auto" or "ray://host:10001"), or on a
+    local Ray instance started here (`workers` CPUs) when no address is given."""
+    try:
+        import ray
+    except ImportError:
+        raise InputError(
+            "command line", "--backend", "ray", "the ray extra installed: pip install 'surf-swarm[ray]'"
+        ) from None
+    started = False
+    if not ray.is_initialized():
+        kwargs: dict = {"include_dashboard": False, "log_to_driver": False, "configure_logging": False}
+        if address is not None:
+            ray.init(address=address, **kwargs)
+        else:
+            ray.init(num_cpus=workers or default_workers(), **kwargs)
+        started = True
+    try:
+        remote = ray.remote(num_cpus=1)(run_task)
+        in_flight = max(2, 2 * int(ray.cluster_resources().get("CPU", 1)))
+        pending = list(reversed(tasks))
+        running: list = []
+        while pending or running:
+            while pending and len(running) < in_flight:
+                running.append(remote.remote(pending.pop()))
+            done, running = ray.wait(running, num_returns=1)
+            for ref in done:
+                yield ray.get(ref)
+    except ray.exceptions.RayError as exc:
+        raise SwarmError(f"study: the Ray backend failed: {exc}") from None
+    finally:
+        if started:
+            ray.shutdown()

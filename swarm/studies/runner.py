@@ -1,0 +1,88 @@
+"""One run of a study: a mission at one parameter point with one seed, simulated with the built-in
+policy, turned into one row of the results table (`swarm.studies.table`).
+
+A run's seed is ``SeedSequence(study seed, spawn_key=(point, run))``: it depends only on where the
+run sits in the study, never on which worker ran it or when, so a study gives the same table on
+one process, on many, or on a Ray cluster, and resuming reruns exactly the missing runs.
+
+Workers keep the mission and its plan of each point they have seen (`_prepared`): planning a
+point's routes (seconds for a large swarm) happens once per worker, not once per run.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections import Counter
+from dataclasses import dataclass
+from functools import lru_cache
+
+import numpy as np
+
+from swarm.sim.hazards import CAUSES
+from swarm.studies.table import CRITERIA
+
+#: Points whose mission and plan a worker keeps.
+PREPARED_CACHE = 16
+
+
+@dataclass(frozen=True)
+class RunTask:
+    """What a worker needs for one run: picklable, small."""
+
+    mission_path: str
+    point: int
+    run: int
+    overrides: tuple[tuple[str, object], ...]
+    seed: int
+
+
+def run_seed(study_seed: int, point: int, run: int) -> int:
+    """The simulator seed of run `run` at point `point` (module docstring)."""
+    ss = np.random.SeedSequence(study_seed, spawn_key=(point, run))
+    return int(ss.generate_state(1, dtype=np.uint64)[0])
+
+
+@lru_cache(maxsize=PREPARED_CACHE)
+def _prepared(mission_path: str, overrides: tuple[tuple[str, object], ...]):
+    from swarm.mission.load import load_mission
+    from swarm.mission.plan import plan_mission
+
+    mission = load_mission(mission_path, dict(overrides), overrides_source="--sweep")
+    return mission, plan_mission(mission, seed=mission.seed, workers=1)
+
+
+def run_task(task: RunTask) -> dict:
+    """Simulate one run and return its row (column name -> value)."""
+    from swarm.sim.run import simulate
+
+    started = time.perf_counter()
+    mission, plan = _prepared(task.mission_path, task.overrides)
+    log = simulate(mission, seed=task.seed, plan=plan, record_every_s=math.inf)
+    row: dict = {"point": task.point, "run": task.run, "seed": task.seed}
+    row.update(dict(task.overrides))
+    row["robots"] = mission.swarm.count
+    row["success"] = bool(log.outcome["success"])
+    criteria = log.outcome["criteria"]
+    for c in CRITERIA:
+        got = criteria.get(c)
+        row[f"value_{c}"] = float(got["value"]) if got is not None else None
+        row[f"met_{c}"] = bool(got["met"]) if got is not None else False
+    causes = Counter(x["cause"] for x in log.losses)
+    row["lost"] = len(log.losses)
+    for c in CAUSES:
+        row[f"lost_{c}"] = causes.get(c, 0)
+    row["losses"] = [
+        {
+            "cause": x["cause"],
+            "phase": x["phase"],
+            "t_s": float(x["t_s"]),
+            "x_m": float(x["x_m"]),
+            "y_m": float(x["y_m"]),
+        }
+        for x in log.losses
+    ]
+    row["completed_s"] = None if log.completed_s is None else float(log.completed_s)
+    row["duration_s"] = float(log.times_s[-1]) if len(log.times_s) else 0.0
+    row["runtime_s"] = time.perf_counter() - started
+    return row

@@ -1,0 +1,240 @@
+"""A Monte Carlo study: a mission run N times at every point of a parameter grid, results stored
+as they come (resumable), then summarized with confidence intervals.
+
+```python
+spec = StudySpec("missions/mine_clear.yaml", runs=40, sweeps=parse_sweeps(["swarm.count=10:60:10"]))
+table, summary = run_study(spec, "reports/mine_clear-study", workers=2)
+summary["required"]     # the smallest swept swarm size that succeeds with P >= 0.95, at 95% confidence
+```
+"""
+
+from __future__ import annotations
+
+import datetime
+import json
+from collections import Counter
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pyarrow as pa
+
+import swarm
+from swarm.errors import SwarmError
+from swarm.files import write_text_atomic
+from swarm.studies import backends, stats
+from swarm.studies.runner import RunTask, run_seed
+from swarm.studies.store import ResultStore
+from swarm.studies.sweep import Sweep, check_points, points
+from swarm.studies.table import schema
+
+#: Interval widths the summary says how many runs would reach.
+WIDTHS = (0.1, 0.05)
+#: Runs per stored chunk, at most (a kill loses at most the runs in flight and one chunk's worth).
+CHUNK_RUNS = 20
+
+Progress = Callable[[int, int], None]
+
+
+@dataclass(frozen=True)
+class StudySpec:
+    """What a study is: the mission, the grid, runs per point and the seed its run seeds come from."""
+
+    mission_path: str
+    runs: int
+    sweeps: list[Sweep] = field(default_factory=list)
+    seed: int = 0
+    target: float = 0.95
+    confidence: float = 0.95
+
+    def __post_init__(self) -> None:
+        if self.runs < 1:
+            raise SwarmError(f"study: runs must be >= 1, found {self.runs}")
+        if not 0.0 < self.target < 1.0 or not 0.0 < self.confidence < 1.0:
+            raise SwarmError("study: target and confidence must lie strictly between 0 and 1")
+
+    def points(self) -> list[dict[str, object]]:
+        return points(self.sweeps)
+
+    def tasks(self) -> list[RunTask]:
+        """Every run of the study, point by point."""
+        out = []
+        for p, overrides in enumerate(self.points()):
+            items = tuple(overrides.items())
+            for r in range(self.runs):
+                out.append(RunTask(self.mission_path, p, r, items, run_seed(self.seed, p, r)))
+        return out
+
+    def as_dict(self) -> dict:
+        """What identifies the study (a resume must match it)."""
+        return {
+            "mission": str(Path(self.mission_path).resolve()),
+            "runs": self.runs,
+            "sweeps": {s.key: list(s.values) for s in self.sweeps},
+            "seed": self.seed,
+        }
+
+    def table_schema(self) -> pa.Schema:
+        return schema([(s.key, _arrow_type(s)) for s in self.sweeps])
+
+
+def _arrow_type(sweep: Sweep) -> pa.DataType:
+    if sweep.is_integer:
+        return pa.int64()
+    if sweep.is_number:
+        return pa.float64()
+    if all(isinstance(v, bool) for v in sweep.values):
+        return pa.bool_()
+    return pa.string()
+
+
+def run_study(
+    spec: StudySpec,
+    out: str | Path,
+    *,
+    backend: str = "local",
+    workers: int | None = None,
+    address: str | None = None,
+    progress: Progress | None = None,
+) -> tuple[pa.Table, dict]:
+    """Run what is missing of the study in `out`, then write results.parquet and summary.json.
+
+    `progress(done, total)` is called as runs finish (`done` counts runs found from before)."""
+    if backend not in backends.BACKENDS:
+        raise SwarmError(f"study: backend {backend!r}, expected one of {list(backends.BACKENDS)}")
+    check_points(spec.mission_path, spec.sweeps)
+    store = ResultStore(out, spec.table_schema())
+    store.open(spec.as_dict())
+    done = store.done()
+    tasks = [t for t in spec.tasks() if (t.point, t.run) not in done]
+    total = len(spec.points()) * spec.runs
+    if progress is not None:
+        progress(total - len(tasks), total)
+    n_workers = workers or backends.default_workers()
+    if backend == "local":
+        rows = backends.run_local(tasks, n_workers)
+    else:
+        rows = backends.run_ray(tasks, workers, address)
+    buffer: list[dict] = []
+    finished = total - len(tasks)
+    chunk = max(1, min(CHUNK_RUNS, len(tasks) // (4 * n_workers) or 1))
+    try:
+        for row in rows:
+            buffer.append(row)
+            finished += 1
+            if len(buffer) >= chunk:
+                store.append(buffer)
+                buffer = []
+            if progress is not None:
+                progress(finished, total)
+    finally:
+        store.append(buffer)  # keep what finished, also on Ctrl-C
+    table = store.finish()
+    summary = summarize(spec, table)
+    from swarm.mission.load import load_mission
+
+    summary.update(
+        {
+            "backend": backend,
+            "workers": n_workers,
+            "map": load_mission(spec.mission_path).beach_map.name,
+            "date": datetime.date.today().isoformat(),
+        }
+    )
+    write_text_atomic(Path(out) / "summary.json", json.dumps(summary, indent=1, sort_keys=True) + "\n")
+    return table, summary
+
+
+def summarize(spec: StudySpec, table: pa.Table) -> dict:
+    """Per point: success rate with its Wilson interval, completion times, losses by cause and
+    phase, runs for narrower intervals; the required value of the first swept key; totals."""
+    cols = table.to_pydict()
+    point_of = np.asarray(cols["point"], dtype=np.int64)
+    success = np.asarray(cols["success"], dtype=bool)
+    completed = np.array([np.nan if v is None else v for v in cols["completed_s"]], dtype=np.float64)
+    losses = cols["losses"]
+    out_points = []
+    for p, params in enumerate(spec.points()):
+        mine = np.flatnonzero(point_of == p)
+        k, n = int(success[mine].sum()), len(mine)
+        low, high = stats.wilson_interval(k, n, spec.confidence) if n else (0.0, 1.0)
+        rate = k / n if n else float("nan")
+        by_cause, by_phase = _loss_counts(losses[i] for i in mine)
+        out_points.append(
+            {
+                "index": p,
+                "params": params,
+                "runs": n,
+                "successes": k,
+                "success_rate": rate,
+                "wilson_low": low,
+                "wilson_high": high,
+                "completed_s": stats.distribution(completed[mine]),
+                "losses_by_cause": by_cause,
+                "losses_by_phase": by_phase,
+                "lost_mean": float(np.mean([len(losses[i]) for i in mine])) if n else 0.0,
+                "runs_for_width": {
+                    f"{w:g}": stats.runs_for_width(rate, w, spec.confidence) if n else None for w in WIDTHS
+                },
+            }
+        )
+    by_cause, by_phase = _loss_counts(losses)
+    return {
+        "mission": Path(spec.mission_path).stem,
+        "mission_path": str(spec.mission_path),
+        "seed": spec.seed,
+        "runs_per_point": spec.runs,
+        "runs": len(point_of),
+        "target": spec.target,
+        "confidence": spec.confidence,
+        "sweeps": {s.key: list(s.values) for s in spec.sweeps},
+        "points": out_points,
+        "required": _required(spec, out_points),
+        "losses_by_cause": by_cause,
+        "losses_by_phase": by_phase,
+        "version": getattr(swarm, "__version__", "unknown"),
+    }
+
+
+def _loss_counts(per_run) -> tuple[dict[str, int], dict[str, dict[str, int]]]:
+    causes: Counter = Counter()
+    phases: dict[str, Counter] = {}
+    for run in per_run:
+        for loss in run:
+            causes[loss["cause"]] += 1
+            phases.setdefault(loss["phase"], Counter())[loss["cause"]] += 1
+    return dict(sorted(causes.items())), {p: dict(sorted(c.items())) for p, c in sorted(phases.items())}
+
+
+def _required(spec: StudySpec, pts: list[dict]) -> dict | None:
+    """The smallest value of the first swept numeric key reaching the target (others held at their
+    first value); None without a numeric sweep."""
+    numeric = [s for s in spec.sweeps if s.is_number]
+    if not numeric:
+        return None
+    key = numeric[0].key
+    fixed = {s.key: s.values[0] for s in spec.sweeps if s.key != key}
+    chosen = [pt for pt in pts if all(pt["params"][k] == v for k, v in fixed.items()) and pt["runs"]]
+    if not chosen:
+        return None
+    name = "swarm size" if key == "swarm.count" else key
+    answer = stats.required_value(
+        [float(pt["params"][key]) for pt in chosen],
+        [pt["successes"] for pt in chosen],
+        [pt["runs"] for pt in chosen],
+        spec.target,
+        spec.confidence,
+        name=name,
+    )
+    value = answer.value
+    if value is not None and numeric[0].is_integer:
+        value = int(value)
+    return {
+        "key": key,
+        "value": value,
+        "target": spec.target,
+        "confidence": spec.confidence,
+        "held": fixed,
+        "note": answer.note,
+    }

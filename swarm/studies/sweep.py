@@ -1,0 +1,110 @@
+"""`--sweep KEY=VALUES`: which mission keys a study varies and over what values; the study is
+their product.
+
+VALUES is a list, ``0.5,1,2``, or an inclusive range ``start:stop:step`` (``10:60:10`` is 10, 20,
+..., 60); each value is read as YAML (``20`` an integer, ``1.5`` a number, ``true``, text). KEY is
+a dotted key path of the mission schema, as `--set` and `parallel_env(overrides=...)` take
+(`swarm.mission.load.apply_overrides`). Every point is checked against the schema before a single
+run starts, so a bad key or value is one line naming it.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+from swarm.errors import InputError
+from swarm.files import parse_yaml
+
+#: A range may not expand to more values than this (a typo like 1:1000000:1 is refused).
+MAX_VALUES = 1000
+
+
+@dataclass(frozen=True)
+class Sweep:
+    """One swept key and its values, in order."""
+
+    key: str
+    values: tuple[object, ...]
+
+    @property
+    def is_integer(self) -> bool:
+        return all(isinstance(v, int) and not isinstance(v, bool) for v in self.values)
+
+    @property
+    def is_number(self) -> bool:
+        return all(isinstance(v, int | float) and not isinstance(v, bool) for v in self.values)
+
+
+def _number(text: str, source: str) -> int | float:
+    value = parse_yaml(text, source)
+    if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
+        raise InputError("command line", source, text, "a number (start:stop:step)")
+    return value
+
+
+def _range(key: str, text: str) -> tuple[object, ...]:
+    parts = text.split(":")
+    if len(parts) != 3:
+        raise InputError("command line", f"--sweep {key}", text, "start:stop:step, e.g. 10:60:10")
+    start, stop, step = (_number(p.strip(), f"--sweep {key}") for p in parts)
+    if step <= 0 or stop < start:
+        raise InputError("command line", f"--sweep {key}", text, "start <= stop and a step > 0")
+    count = math.floor((stop - start) / step + 1e-9) + 1
+    if count > MAX_VALUES:
+        raise InputError("command line", f"--sweep {key}", text, f"at most {MAX_VALUES} values")
+    if all(isinstance(v, int) for v in (start, stop, step)):
+        return tuple(int(start + i * step) for i in range(count))
+    return tuple(round(start + i * step, 12) for i in range(count))
+
+
+def parse_sweep(text: str) -> Sweep:
+    """One `--sweep KEY=VALUES` argument."""
+    key, sep, values = text.partition("=")
+    key = key.strip()
+    if not sep or not key or not values.strip():
+        raise InputError(
+            "command line",
+            "--sweep",
+            text,
+            "KEY=VALUES, e.g. swarm.count=10:60:10 or hazards.surf.wave_height_m=0.5,1,2",
+        )
+    if ":" in values and "," not in values:
+        items = _range(key, values.strip())
+    else:
+        items = tuple(parse_yaml(v.strip(), f"--sweep {key}") for v in values.split(",") if v.strip())
+    if not items:
+        raise InputError("command line", f"--sweep {key}", values, "at least one value")
+    if len(set(map(repr, items))) != len(items):
+        raise InputError("command line", f"--sweep {key}", values, "values without repeats")
+    return Sweep(key, items)
+
+
+def parse_sweeps(texts: Sequence[str]) -> list[Sweep]:
+    sweeps = [parse_sweep(t) for t in texts]
+    keys = [s.key for s in sweeps]
+    for k in keys:
+        if keys.count(k) > 1:
+            raise InputError("command line", f"--sweep {k}", "the key twice", "each key swept once")
+    return sweeps
+
+
+def points(sweeps: Sequence[Sweep]) -> list[dict[str, object]]:
+    """The product of the sweeps, the last key varying fastest: one overrides dict per point (a
+    study without sweeps has one point, the mission as written)."""
+    return [
+        dict(zip([s.key for s in sweeps], combo, strict=True))
+        for combo in itertools.product(*(s.values for s in sweeps))
+    ]
+
+
+def check_points(mission_path: str | Path, sweeps: Sequence[Sweep]) -> None:
+    """Load the mission at every point (keys exist, values are valid), so a bad sweep fails before
+    any run: `--sweep swarm.count: found -5, expected ...` (one line, naming the key)."""
+    from swarm.mission.load import load_mission
+
+    for point in points(sweeps):
+        load_mission(mission_path, point, overrides_source="--sweep")

@@ -1,0 +1,61 @@
+"""The results table of a study: one row per run, its columns and their Arrow types.
+
+Columns, in order:
+
+- ``point`` (int32), ``run`` (int32): the parameter point and the run's index within it; the
+  pair identifies a run.
+- ``seed`` (uint64): the run's simulator seed, from ``SeedSequence(study seed, spawn_key=(point,
+  run))``.
+- one column per swept key, named by its key path (``swarm.count``, ``hazards.surf.wave_height_m``),
+  float64 or int64 as the sweep's values are.
+- ``robots`` (int32): robots launched.
+- ``success`` (bool): every success criterion met.
+- ``value_<criterion>`` (float64) and ``met_<criterion>`` (bool) for each criterion the mission
+  has (landing, detection, relay, surveillance, beacon, recovered; null/False where absent).
+- ``lost`` (int32) and ``lost_<cause>`` (int32) for each cause of `swarm.sim.hazards.CAUSES`.
+- ``losses`` (list of struct cause: string, phase: string, t_s: float64, x_m: float64,
+  y_m: float64): every loss, for loss maps and losses by phase.
+- ``completed_s`` (float64): mission time when every criterion was first met; null if never.
+- ``duration_s`` (float64): mission time simulated.
+- ``runtime_s`` (float64): wall-clock seconds the run took (the only column that differs between
+  two runs of the same study).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import pyarrow as pa
+
+from swarm.sim.hazards import CAUSES
+
+CRITERIA = ("landing", "detection", "relay", "surveillance", "beacon", "recovered")
+LOSS = pa.struct(
+    [
+        ("cause", pa.string()),
+        ("phase", pa.string()),
+        ("t_s", pa.float64()),
+        ("x_m", pa.float64()),
+        ("y_m", pa.float64()),
+    ]
+)
+#: Columns that may differ between two runs of the same study (wall-clock time).
+VOLATILE = ("runtime_s",)
+
+
+def schema(sweep_types: Sequence[tuple[str, pa.DataType]]) -> pa.Schema:
+    """The table's schema for a study sweeping these (key, type) pairs."""
+    fields = [pa.field("point", pa.int32()), pa.field("run", pa.int32()), pa.field("seed", pa.uint64())]
+    fields += [pa.field(key, kind) for key, kind in sweep_types]
+    fields += [pa.field("robots", pa.int32()), pa.field("success", pa.bool_())]
+    for c in CRITERIA:
+        fields += [pa.field(f"value_{c}", pa.float64()), pa.field(f"met_{c}", pa.bool_())]
+    fields += [pa.field("lost", pa.int32())]
+    fields += [pa.field(f"lost_{c}", pa.int32()) for c in CAUSES]
+    fields += [
+        pa.field("losses", pa.list_(LOSS)),
+        pa.field("completed_s", pa.float64()),
+        pa.field("duration_s", pa.float64()),
+        pa.field("runtime_s", pa.float64()),
+    ]
+    return pa.schema(fields)

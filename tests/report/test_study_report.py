@@ -1,0 +1,364 @@
+"""The study report: a synthetic results table and the summary it implies, written to a report whose
+Markdown and HTML must agree with each other and with the summary, with figures that decode."""
+
+from __future__ import annotations
+
+import base64
+import io
+import math
+import re
+from html.parser import HTMLParser
+from pathlib import Path
+
+import numpy as np
+import pyarrow as pa
+import pytest
+from PIL import Image
+
+from swarm.report import study_figures as figs
+from swarm.report.study_report import answer, loss_rows, study_rows, write_study_report
+from swarm.sim.hazards import CAUSES
+from swarm.studies.table import CRITERIA, schema
+from swarm.world.io import load_map
+
+ROOT = Path(__file__).resolve().parents[2]
+KEY = "swarm.count"
+COUNTS = (10, 20, 30)
+P_SUCCESS = (0.1, 0.5, 1.0)
+RUNS = 40
+TARGET = 0.8
+Z95 = 1.959963984540054
+LOSS_CAUSES = ("failure", "wave_impact", "immobilized", "mine")
+LOSS_PHASES = ("sea_transit", "surf_crossing", "beach", "returning")
+
+
+def wilson(k: int, n: int, z: float = Z95) -> tuple[float, float]:
+    p = k / n
+    centre = (p + z * z / (2 * n)) / (1 + z * z / n)
+    half = z / (1 + z * z / n) * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n))
+    return max(0.0, centre - half), min(1.0, centre + half)
+
+
+def make_table(bounds: tuple[float, float, float, float], completed: bool = True) -> pa.Table:
+    """RUNS runs at each of COUNTS with success probabilities P_SUCCESS, random losses on the map."""
+    rng = np.random.default_rng(7)
+    x0, y0, x1, y1 = bounds
+    rows = []
+    for point, (count, p) in enumerate(zip(COUNTS, P_SUCCESS, strict=True)):
+        for run in range(RUNS):
+            success = bool(rng.random() < p)
+            n_lost = int(rng.poisson(0.1 * count))
+            losses = [
+                {
+                    "cause": str(rng.choice(LOSS_CAUSES)),
+                    "phase": str(rng.choice(LOSS_PHASES)),
+                    "t_s": float(rng.uniform(0, 1800)),
+                    "x_m": float(rng.uniform(x0, x1)),
+                    "y_m": float(rng.uniform(y0, y1)),
+                }
+                for _ in range(n_lost)
+            ]
+            row = {
+                "point": point,
+                "run": run,
+                "seed": int(rng.integers(0, 2**63)),
+                KEY: count,
+                "robots": count,
+                "success": success,
+                "lost": n_lost,
+                "losses": losses,
+                "completed_s": float(rng.normal(1200, 150)) if success and completed else math.nan,
+                "duration_s": 1800.0,
+                "runtime_s": 0.5,
+            }
+            for c in CRITERIA:
+                row[f"value_{c}"], row[f"met_{c}"] = (1.0, success) if c == "detection" else (math.nan, False)
+            for c in CAUSES:
+                row[f"lost_{c}"] = sum(1 for x in losses if x["cause"] == c)
+            rows.append(row)
+    return pa.Table.from_pylist(rows, schema=schema([(KEY, pa.int64())]))
+
+
+def summarise(table: pa.Table) -> dict:
+    """The summary the study code would write for `table` (the fields the report reads)."""
+    rows = table.to_pylist()
+    points = []
+    for i, count in enumerate(COUNTS):
+        mine = [r for r in rows if r["point"] == i]
+        k, n = sum(r["success"] for r in mine), len(mine)
+        done = np.array([r["completed_s"] for r in mine if not math.isnan(r["completed_s"])])
+        lo, hi = wilson(k, n)
+        by_cause: dict[str, int] = {}
+        by_phase: dict[str, dict[str, int]] = {}
+        for r in mine:
+            for x in r["losses"]:
+                by_cause[x["cause"]] = by_cause.get(x["cause"], 0) + 1
+                by_phase.setdefault(x["phase"], {})[x["cause"]] = (
+                    by_phase.get(x["phase"], {}).get(x["cause"], 0) + 1
+                )
+        points.append(
+            {
+                "index": i,
+                "params": {KEY: count},
+                "runs": n,
+                "successes": k,
+                "success_rate": k / n,
+                "wilson_low": lo,
+                "wilson_high": hi,
+                "completed_s": {
+                    "count": n,
+                    "completed": len(done),
+                    "median": float(np.median(done)) if len(done) else None,
+                    "mean": float(done.mean()) if len(done) else None,
+                },
+                "losses_by_cause": by_cause,
+                "losses_by_phase": by_phase,
+                "lost_mean": sum(r["lost"] for r in mine) / n,
+                "runs_for_width": {"0.1": 100 + i, "0.05": 400 + i},
+            }
+        )
+    first = next(p for p in points if p["wilson_low"] >= TARGET)
+    pooled_cause: dict[str, int] = {}
+    pooled_phase: dict[str, dict[str, int]] = {}
+    for p in points:
+        for c, n in p["losses_by_cause"].items():
+            pooled_cause[c] = pooled_cause.get(c, 0) + n
+        for ph, cs in p["losses_by_phase"].items():
+            for c, n in cs.items():
+                pooled_phase.setdefault(ph, {})[c] = pooled_phase.get(ph, {}).get(c, 0) + n
+    return {
+        "mission": "mine_clear",
+        "map": "test_small",
+        "seed": 0,
+        "runs_per_point": RUNS,
+        "target": TARGET,
+        "confidence": 0.95,
+        "sweeps": {KEY: list(COUNTS)},
+        "backend": "local",
+        "workers": 2,
+        "version": "0.1.0",
+        "date": "2025-01-02",
+        "points": points,
+        "required": {
+            "key": KEY,
+            "value": first["params"][KEY],
+            "target": TARGET,
+            "confidence": 0.95,
+            "note": "the smallest swarm.count whose Wilson lower bound reaches the target",
+        },
+        "losses_by_cause": pooled_cause,
+        "losses_by_phase": pooled_phase,
+        "runs": len(rows),
+    }
+
+
+class _Tables(HTMLParser):
+    """Every <table> of a page as rows of cell texts."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.tables: list[list[list[str]]] = []
+        self._cell: list[str] | None = None
+
+    def handle_starttag(self, tag: str, attrs: list) -> None:
+        if tag == "table":
+            self.tables.append([])
+        elif tag == "tr":
+            self.tables[-1].append([])
+        elif tag in ("td", "th"):
+            self._cell = []
+
+    def handle_endtag(self, tag: str) -> None:
+        if tag in ("td", "th") and self._cell is not None:
+            self.tables[-1][-1].append("".join(self._cell).strip())
+            self._cell = None
+
+    def handle_data(self, data: str) -> None:
+        if self._cell is not None:
+            self._cell.append(data)
+
+
+def html_point_table(page: str) -> list[list[str]]:
+    parser = _Tables()
+    parser.feed(page)
+    return next(t for t in parser.tables if "P(success)" in t[0])
+
+
+def md_point_table(text: str) -> list[list[str]]:
+    lines = text.splitlines()
+    start = next(i for i, line in enumerate(lines) if "| P(success) |" in line)
+    rows = []
+    for line in lines[start:]:
+        if not line.startswith("|"):
+            break
+        if not line.startswith("|---"):
+            rows.append([c.strip() for c in line.strip().strip("|").split("|")])
+    return rows
+
+
+def column(rows: list[list[str]], name: str) -> list[str]:
+    j = rows[0].index(name)
+    return [r[j] for r in rows[1:]]
+
+
+@pytest.fixture(scope="module")
+def beach_map():
+    return load_map(ROOT / "maps" / "test_small.yaml")
+
+
+@pytest.fixture(scope="module")
+def study(beach_map):
+    table = make_table(beach_map.bounds_m)
+    return table, summarise(table)
+
+
+@pytest.fixture(scope="module")
+def report(tmp_path_factory, study, beach_map):
+    table, summary = study
+    out = tmp_path_factory.mktemp("study")
+    paths = write_study_report(out, table, summary, beach_map)
+    return (
+        paths,
+        paths["report.md"].read_text(encoding="utf-8"),
+        paths["report.html"].read_text(encoding="utf-8"),
+    )
+
+
+def test_report_files_exist_and_figures_decode(report):
+    paths, _, page = report
+    assert set(paths) == {"report.md", "report.html"}
+    assert all(p.is_file() and p.stat().st_size > 0 for p in paths.values())
+    assert not [p for p in paths["report.md"].parent.iterdir() if p.name.startswith(".")]  # no temp left
+    images = re.findall(r"data:image/png;base64,([A-Za-z0-9+/=]+)", page)
+    assert len(images) == 4  # success, losses, loss map, completion
+    for data in images:
+        img = Image.open(io.BytesIO(base64.b64decode(data)))
+        img.load()
+        assert img.format == "PNG"
+        assert 400 <= img.width <= 2000 and 150 <= img.height <= 2000
+    assert "http://" not in page and "https://" not in page  # self-contained
+
+
+def test_markdown_and_html_agree_with_the_summary(report, study):
+    _, md, page = report
+    _, summary = study
+    md_rows, html_rows = md_point_table(md), html_point_table(page)
+    assert md_rows == html_rows
+    rates = [float(v) for v in column(md_rows, "P(success)")]
+    assert rates == pytest.approx([p["success_rate"] for p in summary["points"]], abs=5e-4)
+    assert [int(v) for v in column(html_rows, KEY)] == list(COUNTS)
+    assert [int(v) for v in column(html_rows, "successes")] == [p["successes"] for p in summary["points"]]
+    lows = [float(v.split(" to ")[0]) for v in column(html_rows, "95% Wilson interval")]
+    assert lows == pytest.approx([p["wilson_low"] for p in summary["points"]], abs=5e-4)
+    assert column(md_rows, "lower bound ≥ target") == ["no", "no", "yes"]
+    assert column(md_rows, "runs for ±0.05") == ["400", "401", "402"]
+    lost = [float(v) for v in column(md_rows, "mean lost per run")]
+    assert lost == pytest.approx([p["lost_mean"] for p in summary["points"]], abs=5e-3)
+
+
+def test_the_answer_names_the_required_size(report):
+    _, md, page = report
+    sentence = "mine_clear needs 30 robots for P(success) >= 0.8 at 95% confidence"
+    assert sentence in md
+    assert sentence.replace(">", "&gt;") in page
+    assert md.index(sentence) < md.index("| P(success) |")  # the answer comes before the tables
+
+
+def test_loss_table_totals_match_the_results_table(study):
+    table, summary = study
+    rows = loss_rows(summary)
+    total = rows[-1]
+    assert total[0] == "total"
+    lost = sum(table.column("lost").to_pylist())
+    assert int(total[rows[0].index("total")]) == lost
+    for c in LOSS_CAUSES:
+        row = next(r for r in rows if r[0] == c)
+        assert int(row[rows[0].index("total")]) == sum(table.column(f"lost_{c}").to_pylist())
+    assert rows[0][1:5] == list(LOSS_PHASES)  # phases in mission order
+
+
+def test_loss_points_are_every_loss_on_the_map(study, beach_map):
+    table, _ = study
+    x, y, cause = figs.loss_points(table)
+    assert len(x) == sum(table.column("lost").to_pylist()) > 0
+    assert np.all(beach_map.contains(x, y))
+    assert set(cause) <= set(LOSS_CAUSES)
+    assert figs.loss_bin_m(beach_map) == 5.0
+
+
+def test_no_required_value_shows_the_note(tmp_path, study):
+    table, summary = study
+    note = "no swept swarm.count reaches P(success) >= 0.99; try more robots"
+    unmet = {**summary, "required": {"key": KEY, "value": None, "target": 0.99, "note": note}}
+    assert answer(unmet) == note
+    paths = write_study_report(tmp_path, table, unmet, None)
+    md, page = paths["report.md"].read_text(), paths["report.html"].read_text()
+    assert note in md and "needs" not in md
+    assert "try more robots" in page and "needs 30 robots" not in page
+    assert "No map given." in page  # the loss map needs a map
+    assert len(re.findall(r"data:image/png;base64,", page)) == 3
+
+
+def test_two_swept_keys_draw_one_line_per_value():
+    points = []
+    for i, (count, h) in enumerate([(c, h) for h in (0.5, 1.5) for c in COUNTS]):
+        k = min(RUNS, int(RUNS * count / 30 / (1 + h)))
+        lo, hi = wilson(k, RUNS)
+        points.append(
+            {
+                "index": i,
+                "params": {KEY: count, "hazards.surf.wave_height_m": h},
+                "runs": RUNS,
+                "successes": k,
+                "success_rate": k / RUNS,
+                "wilson_low": lo,
+                "wilson_high": hi,
+            }
+        )
+    summary = {
+        "target": 0.5,
+        "confidence": 0.95,
+        "sweeps": {KEY: list(COUNTS), "hazards.surf.wave_height_m": [0.5, 1.5]},
+        "points": points,
+        "required": {"key": KEY, "value": 20},
+    }
+    assert figs.x_key(summary) == KEY
+    assert figs.short_label(points[0]["params"]) == "count = 10, wave_height_m = 0.5"
+    assert figs.key_label("hazards.surf.wave_height_m") == "hazards.surf.wave_height_m (m)"
+    png = figs.success_png(summary)
+    assert png is not None and Image.open(io.BytesIO(png)).width > 400
+    assert figs.success_png(summary) == png  # no timestamp: the same study gives the same bytes
+    rows = study_rows(summary)
+    assert rows[0][:2] == [KEY, "hazards.surf.wave_height_m"]
+    assert [r[1] for r in rows[1:]] == ["0.5"] * 3 + ["1.5"] * 3
+    assert all(r[-2] == "-" for r in rows[1:])  # no losses or runs for width given: a dash, no error
+
+
+def test_empty_study_skips_figures(tmp_path, beach_map):
+    empty = schema([(KEY, pa.int64())]).empty_table()
+    summary = {
+        "mission": "mine_clear",
+        "map": "test_small",
+        "seed": 1,
+        "target": 0.9,
+        "points": [],
+        "runs": 0,
+    }
+    assert figs.success_png(summary) is None
+    assert figs.losses_png(summary) is None
+    assert figs.loss_map_png(empty, beach_map) is None
+    assert figs.completion_png(empty, summary) is None
+    assert len(figs.loss_points(empty)[0]) == 0
+    paths = write_study_report(tmp_path, empty, summary, beach_map)
+    page = paths["report.html"].read_text()
+    assert "data:image/png" not in page
+    assert "No runs in the results table." in page and "No robot was lost." in page
+    assert study_rows(summary) == study_rows(summary)[:1]  # the header alone
+
+
+def test_no_completed_run_says_so(beach_map):
+    table = make_table(beach_map.bounds_m, completed=False)
+    png = figs.completion_png(table, summarise(table))
+    assert png is not None
+    img = Image.open(io.BytesIO(png))
+    assert img.width > img.height  # the one-line note, not a grid of panels

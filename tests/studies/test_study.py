@@ -1,0 +1,213 @@
+"""Studies end to end on tiny missions: seeds that do not depend on workers or order, resume after
+kill -9, the Ray backend, a required swarm size against the k-out-of-n closed form, bad sweeps."""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import math
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pyarrow as pa
+import pyarrow.parquet as pq
+import pytest
+import yaml
+
+from swarm.cli import main
+from swarm.errors import InputError
+from swarm.studies import backends
+from swarm.studies.runner import run_seed
+from swarm.studies.stats import k_out_of_n, wilson_interval
+from swarm.studies.study import StudySpec, run_study
+from swarm.studies.sweep import parse_sweep, parse_sweeps, points
+from swarm.studies.table import VOLATILE
+
+REPO = Path(__file__).resolve().parents[2]
+#: Hazards that take nobody but random failure.
+QUIET = {
+    "surf": {"damage_h50_m": 10.0},
+    "immobilization": {"per_km": 0.0},
+    "rocks": {"damage_per_km": 0.0, "collision_damage_probability": 0.0},
+}
+
+
+def _mission(tmp: Path, name: str = "tiny", **changes: object) -> Path:
+    """Robots by hand 20 m off maps/test_small, landing on one zone: a run is about a second."""
+    mission = {
+        "name": name,
+        "map": str(REPO / "maps" / "test_small.yaml"),
+        "planner": str(REPO / "planners" / "fast.yaml"),
+        "swarm": {"count": 3},
+        "launch": {"platform": "by_hand", "points": ["launch_1"], "offshore_m": 20, "interval_s": 0},
+        "phases": {
+            "sea_transit": {"time_limit_s": 300},
+            "surf_crossing": {"time_limit_s": 300},
+            "beach_operations": {"time_limit_s": 120},
+            "return_to_sea": {"enabled": False},
+        },
+        "tasks": [{"type": "landing", "zones": ["landing_a"], "robots_per_zone": 2}],
+        "hazards": {**QUIET, "attrition": {"mtbf_h": 0.05}},
+    }
+    mission.update(changes)
+    path = tmp / f"{name}.yaml"
+    path.write_text(yaml.safe_dump(mission, sort_keys=False))
+    return path
+
+
+def _stable(table: pa.Table) -> pa.Table:
+    """The table without the wall-clock column, as one chunk (for equality)."""
+    return table.drop_columns(list(VOLATILE)).combine_chunks()
+
+
+@pytest.fixture(scope="module")
+def tiny(tmp_path_factory) -> Path:
+    return _mission(tmp_path_factory.mktemp("study"))
+
+
+@pytest.fixture(scope="module")
+def reference(tiny, tmp_path_factory) -> tuple[StudySpec, pa.Table]:
+    """An uninterrupted study on one worker: 2 points x 5 runs."""
+    spec = StudySpec(str(tiny), runs=5, sweeps=parse_sweeps(["swarm.count=2,3"]), seed=7)
+    table, _ = run_study(spec, tmp_path_factory.mktemp("reference"), workers=1)
+    return spec, table
+
+
+def test_run_seeds_come_from_the_study_seed_and_the_runs_place() -> None:
+    seeds = {run_seed(7, p, r) for p in range(4) for r in range(50)}
+    assert len(seeds) == 200  # all distinct
+    assert run_seed(7, 2, 3) == run_seed(7, 2, 3) != run_seed(8, 2, 3)
+
+
+def test_the_table_does_not_depend_on_the_worker_count_or_order(reference, tmp_path) -> None:
+    spec, table = reference
+    assert table.num_rows == 10
+    assert table.column("point").to_pylist() == [0] * 5 + [1] * 5
+    assert table.column("swarm.count").to_pylist() == [2] * 5 + [3] * 5
+    two, _ = run_study(spec, tmp_path / "two", workers=2)
+    assert _stable(two).equals(_stable(table))
+    # and in any order: the reversed task list on one process gives the same rows
+    rows = list(backends.run_local(list(reversed(spec.tasks())), 1))
+    reordered = pa.Table.from_pylist(rows, schema=spec.table_schema()).sort_by(
+        [("point", "ascending"), ("run", "ascending")]
+    )
+    assert _stable(reordered).equals(_stable(table))
+
+
+def test_a_study_killed_mid_way_resumes_to_the_same_table(reference, tiny, tmp_path) -> None:
+    """kill -9 the whole process group once a chunk is on disk; the same command then finishes the
+    study with exactly the uninterrupted table (and does not rerun what was stored)."""
+    spec, expected = reference
+    out = tmp_path / "killed"
+    code = "import sys; from swarm.cli import main; sys.exit(main(sys.argv[1:]))"
+    argv = [sys.executable, "-c", code, "study", str(tiny), "--runs", "5", "--sweep", "swarm.count=2,3",
+            "--seed", "7", "--workers", "2", "--out", str(out)]  # fmt: skip
+    proc = subprocess.Popen(
+        argv, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True
+    )
+    try:
+        deadline = time.monotonic() + 120
+        while not list((out / "parts").glob("part-*.parquet")):
+            assert proc.poll() is None, "the study ended before it could be killed"
+            assert time.monotonic() < deadline
+            time.sleep(0.05)
+    finally:
+        with contextlib.suppress(ProcessLookupError):
+            os.killpg(proc.pid, signal.SIGKILL)
+        proc.wait()
+    kept = pq.read_table(out / "parts").num_rows if (out / "parts").exists() else 0
+    assert 0 < kept < 10
+    assert not (out / "results.parquet").exists()
+    calls: list[tuple[int, int]] = []
+    table, _ = run_study(spec, out, workers=2, progress=lambda done, total: calls.append((done, total)))
+    assert calls[0] == (kept, 10)  # it starts from what was kept
+    assert _stable(table).equals(_stable(expected))
+    assert _stable(pq.read_table(out / "results.parquet")).equals(_stable(expected))
+
+
+def test_the_ray_backend_gives_the_same_table(reference, tmp_path) -> None:
+    pytest.importorskip("ray")  # the `ray` extra; CI installs it
+    spec, expected = reference
+    table, summary = run_study(spec, tmp_path / "ray", backend="ray", workers=2)
+    assert summary["backend"] == "ray"
+    assert _stable(table).equals(_stable(expected))
+
+
+def test_a_resume_with_other_arguments_is_refused(reference, tmp_path) -> None:
+    spec, _ = reference
+    out = tmp_path / "one"
+    run_study(StudySpec(spec.mission_path, 1, spec.sweeps, spec.seed), out, workers=1)
+    with pytest.raises(InputError, match="a different study"):
+        run_study(StudySpec(spec.mission_path, 2, spec.sweeps, spec.seed), out, workers=1)
+
+
+def test_the_required_swarm_size_matches_the_k_out_of_n_closed_form(tmp_path) -> None:
+    """Robots swim 600 m (1200 s at 0.5 m/s) and need 20 s more to the zone; only random failure
+    acts, so each reaches the zone with p = exp(-T / MTBF), and the landing needs k = 2 of them:
+    P(success) = P(Binomial(n, p) >= 2). Each point's Wilson 99.9% interval must hold the closed
+    form, and the required size must lie where the closed form puts it."""
+    mtbf_h = 1.5
+    path = _mission(
+        tmp_path,
+        "kofn",
+        launch={"platform": "by_hand", "points": ["launch_1"], "offshore_m": 600, "interval_s": 0},
+        phases={  # just long enough: the run ends soon after the landing
+            "sea_transit": {"time_limit_s": 1300},
+            "surf_crossing": {"time_limit_s": 100},
+            "beach_operations": {"time_limit_s": 60},
+            "return_to_sea": {"enabled": False},
+        },
+        hazards={**QUIET, "attrition": {"mtbf_h": mtbf_h}},
+    )
+    spec = StudySpec(str(path), runs=30, sweeps=parse_sweeps(["swarm.count=2:5:1"]), seed=1, target=0.7)
+    table, summary = run_study(spec, tmp_path / "out", workers=2)
+    times = [t for ev in table.column("completed_s").to_pylist() if (t := ev) is not None]
+    exposure = sum(times) / len(times)  # release to the landing's completion, mean over runs
+    p = math.exp(-exposure / (mtbf_h * 3600))
+    truth = {n: k_out_of_n(n, 2, p) for n in (2, 3, 4, 5)}
+    for pt in summary["points"]:
+        n = pt["params"]["swarm.count"]
+        low, high = wilson_interval(pt["successes"], pt["runs"], 0.999)
+        assert low <= truth[n] <= high, (n, pt["successes"], truth[n])
+    smallest = min(n for n, v in truth.items() if v >= spec.target)
+    required = summary["required"]["value"]
+    assert required is not None and smallest <= required <= 5, (required, truth)
+
+
+def test_sweeps_parse_lists_and_ranges() -> None:
+    assert parse_sweep("swarm.count=10:60:10").values == (10, 20, 30, 40, 50, 60)
+    assert parse_sweep("hazards.surf.wave_height_m=0.5,1,2").values == (0.5, 1, 2)
+    assert parse_sweep("hazards.surf.wave_height_m=0.5:1.5:0.5").values == (0.5, 1.0, 1.5)
+    grid = points(parse_sweeps(["swarm.count=2,3", "hazards.surf.wave_height_m=0.5,1"]))
+    assert grid == [
+        {"swarm.count": 2, "hazards.surf.wave_height_m": 0.5},
+        {"swarm.count": 2, "hazards.surf.wave_height_m": 1},
+        {"swarm.count": 3, "hazards.surf.wave_height_m": 0.5},
+        {"swarm.count": 3, "hazards.surf.wave_height_m": 1},
+    ]
+
+
+@pytest.mark.parametrize(
+    ("sweep", "names"),
+    [
+        ("swarm.cont=1,2", "swarm.cont"),
+        ("swarm.count=-1,2", "swarm.count"),
+        ("swarm.count=5:1:1", "--sweep swarm.count"),
+        ("swarm.count=1:5", "--sweep swarm.count"),
+        ("swarm.count", "--sweep"),
+        ("hazards.surf.wave_height_m=1,big", "hazards.surf.wave_height_m"),
+    ],
+)
+def test_a_bad_sweep_is_one_line_naming_the_key(tiny, tmp_path, sweep, names) -> None:
+    out = tmp_path / "bad"
+    err = io.StringIO()
+    with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
+        code = main(["study", str(tiny), "--runs", "2", "--sweep", sweep, "--out", str(out)])
+    assert code == 2
+    lines = err.getvalue().strip().splitlines()
+    assert len(lines) == 1 and names in lines[0] and "Traceback" not in err.getvalue()
+    assert not out.exists()  # nothing written
