@@ -58,6 +58,12 @@ def _parser() -> argparse.ArgumentParser:
     validate.add_argument(
         "--plot", type=Path, metavar="FIG.png", help="write the thesis-style overlay figure"
     )
+    validate.add_argument(
+        "--out",
+        type=Path,
+        metavar="DIR",
+        help="write validation.json, validation.npz and the report (report.html, .md, .json) here",
+    )
     validate.set_defaults(handler=_cmd_validate)
 
     calibrate = model_cmds.add_parser(
@@ -77,6 +83,7 @@ def _parser() -> argparse.ArgumentParser:
     _add_plan_command(commands)
     _add_simulate_command(commands)
     _add_study_command(commands)
+    _add_report_command(commands)
     schema = commands.add_parser("schema", help="print the mission file JSON Schema (for editors)")
     schema.set_defaults(handler=_cmd_schema)
     return parser
@@ -149,6 +156,19 @@ def _check_output(path: Path | None, option: str, suffixes: tuple[str, ...]) -> 
 
 
 FIGURE_SUFFIXES = (".png", ".svg", ".pdf")
+
+
+def _check_folder(path: Path | None, option: str) -> None:
+    """Refuse an output folder that is a file, or whose parent does not exist, before any work."""
+    if path is None:
+        return
+    if path.exists() and not path.is_dir():
+        raise InputError("command line", option, str(path), "a folder (this is a file)")
+    parent = path.parent if str(path.parent) else Path(".")
+    if not path.exists() and not parent.is_dir():
+        raise InputError(
+            "command line", option, str(path), f"a folder in an existing folder ({parent} is not one)"
+        )
 
 
 def _choose_mode(args: argparse.Namespace):
@@ -226,6 +246,7 @@ def _cmd_validate(args: argparse.Namespace) -> int:
     from swarm.robot.validate import validate
 
     _check_output(args.plot, "--plot", FIGURE_SUFFIXES)
+    _check_folder(args.out, "--out")
     robot = load_robot(args.robot)
     mode = _choose_mode(args)
     (run,) = _runs(args, robot)
@@ -239,18 +260,38 @@ def _cmd_validate(args: argparse.Namespace) -> int:
         from swarm.report.validation import plot_validation
 
         plot_validation(run, {m: r[1] for m, r in results.items()}, scores, args.plot)
+    written: dict[str, Path] = {}
+    if args.out is not None:
+        from swarm.report.document import today
+        from swarm.report.validation_report import Validation, validation_report, write_validation
+
+        v = Validation(
+            run=run.name,
+            distance_m=run.distance_m,
+            truth=run.truth,
+            trajectories={m: r[1] for m, r in results.items()},
+            scores=scores,
+            model=args.model,
+            terrain=mode.name,
+            robot=str(args.robot),
+        )
+        written = {**write_validation(args.out, v), **validation_report(v, date=today()).write_all(args.out)}
     if args.json:
         out = scores[args.model].as_dict()
         if args.compare:
             out["compare"] = [scores[m].as_dict() for m in models[1:]]
         if args.plot is not None:
             out["plot"] = str(args.plot)
+        if args.out is not None:
+            out["out"] = str(args.out)
         print(json.dumps(out, indent=2))
     else:
         print(f"terrain mode: {mode.name}")
         print(_table(_score_rows(scores.values())))
         if args.plot is not None:
             print(f"figure: {args.plot}")
+        if written:
+            print(f"wrote {', '.join(sorted(written))} in {args.out}")
     return 0
 
 
@@ -512,6 +553,7 @@ def _cmd_plan(args: argparse.Namespace) -> int:
 
     from swarm.mission import load_mission
     from swarm.mission.plan import plan_mission, write_plan
+    from swarm.report.document import today
     from swarm.report.plan_report import summary_rows, write_plan_report
 
     if args.seed is not None and args.seed < 0:
@@ -533,7 +575,7 @@ def _cmd_plan(args: argparse.Namespace) -> int:
 
         seed = mission.seed if args.seed is None else args.seed
         plan = plan_mission(mission, seed=seed, progress=progress, workers=args.workers)
-    paths = {**write_plan(plan, out), **write_plan_report(plan, out)}
+    paths = {**write_plan(plan, out), **write_plan_report(plan, out, date=today())}
     print(f"plan for {plan.mission} on {plan.map}, seed {plan.seed}")
     rows = summary_rows(plan)
     width = max(len(k) for k, _ in rows)
@@ -601,6 +643,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
 
     from swarm.mission import load_mission
     from swarm.mission.plan import plan_mission, write_plan
+    from swarm.report.document import today
     from swarm.report.sim_report import criteria_rows, end_state_rows, loss_rows, verdict, write_sim_report
     from swarm.sim.render import Animator, check_animation_path
     from swarm.sim.run import simulate, write_log
@@ -645,7 +688,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
             with Animator(args.animate) as anim:
                 log = simulate(mission, seed, plan=plan, progress=sim_progress, on_step=anim.on_step)
 
-    paths = {**write_plan(plan, out), **write_log(log, out), **write_sim_report(log, out)}
+    paths = {**write_plan(plan, out), **write_log(log, out), **write_sim_report(log, out, date=today())}
     s = log.summary()
     print(
         f"simulated {log.mission} on {log.map}, seed {log.seed}: {s['robots']} robots, "
@@ -888,6 +931,82 @@ def _cmd_study(args: argparse.Namespace) -> int:
         print("losses: " + ", ".join(f"{c} {n}" for c, n in summary["losses_by_cause"].items()))
     names = ["results.parquet", "summary.json", *(p.name for p in paths.values())]
     print(f"wrote {', '.join(names)} in {out}")
+    return 0
+
+
+# --- swarm report: a report from a plan, a simulation log, a study or a validation (swarm/report) -----------
+def _add_report_command(commands) -> None:
+    """`swarm report PATH [--format html|md|json] [-o FILE]`."""
+    rep = commands.add_parser(
+        "report",
+        help="write the report of a plan, simulation log, study or model validation folder",
+    )
+    rep.add_argument(
+        "path",
+        type=Path,
+        metavar="PATH",
+        help="a folder written by swarm plan, simulate, study or model validate --out (or a file in it)",
+    )
+    rep.add_argument(
+        "--format",
+        dest="fmt",
+        metavar="html|md|json",
+        help="report format (default: by the -o suffix, else html)",
+    )
+    rep.add_argument(
+        "-o",
+        "--out",
+        metavar="FILE",
+        help="file to write (default: PATH/report.html, .md or .json); - writes to stdout",
+    )
+    rep.set_defaults(handler=_cmd_report)
+
+
+def _cmd_report(args: argparse.Namespace) -> int:
+    import os
+
+    from swarm.report.document import FORMATS, format_for, today
+    from swarm.report.load import detect, report_for
+
+    fmt = args.fmt
+    if fmt is not None and fmt not in FORMATS:
+        raise InputError("command line", "--format", fmt, f"one of {', '.join(FORMATS)}")
+    to_stdout = args.out == "-"
+    out = None if args.out is None or to_stdout else Path(args.out)
+    if out is not None:
+        by_suffix = format_for(out)
+        if fmt is None:
+            fmt = by_suffix or "html"
+        elif by_suffix is not None and by_suffix != fmt:
+            raise InputError(
+                "command line", "-o", str(out), f"a file name for --format {fmt} (a {FORMATS[fmt]} file)"
+            )
+        if out.is_dir():
+            raise InputError("command line", "-o", str(out), "a file name (this is a folder)")
+        parent = out.parent if str(out.parent) else Path(".")
+        if not parent.is_dir():
+            raise InputError(
+                "command line", "-o", str(out), f"a file in an existing folder ({parent} is not one)"
+            )
+        if not os.access(parent, os.W_OK) or (out.exists() and not os.access(out, os.W_OK)):
+            raise InputError("command line", "-o", str(out), "a file this user may write")
+    fmt = fmt or "html"
+    _, folder = detect(args.path)
+    if out is None and not to_stdout:
+        out = folder / f"report{FORMATS[fmt]}"
+        if not os.access(folder, os.W_OK):
+            raise InputError(
+                "command line", "PATH", str(folder), "a folder this user may write the report in (or -o)"
+            )
+    report = report_for(args.path, date=today())
+    if to_stdout:
+        sys.stdout.write(report.render(fmt))
+        return 0
+    try:
+        report.write(out, fmt)
+    except OSError as exc:
+        raise InputError("command line", "-o", str(out), f"a writable file ({exc.strerror})") from None
+    print(out)
     return 0
 
 

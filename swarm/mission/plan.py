@@ -29,6 +29,7 @@ plan, and `write_plan` the same bytes.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 from collections.abc import Callable, Sequence
@@ -47,7 +48,7 @@ from swarm.planning import CostMap, PlanningError, build_costmap
 from swarm.planning.allocation import assign
 from swarm.planning.batch import plan_many
 from swarm.planning.coverage import boustrophedon, detection_probability, split_tracks, swath_coverage
-from swarm.planning.radio import RadioParams, comm_range_m
+from swarm.planning.radio import RadioParams, comm_range_m, link_margin_db
 from swarm.planning.relay import plan_relays, standable_grid
 
 #: Entry cells up to this much farther from the launch point than the nearest one may be chosen
@@ -109,6 +110,30 @@ class RelayPlanOut:
     positions_m: np.ndarray
     edges: np.ndarray
     hop_lengths_m: np.ndarray
+    radio: RadioParams | None = None  # the task's radio (robot antenna heights)
+    fixed_height_m: float | None = None  # antenna height of the source and sinks
+
+    @property
+    def nodes_m(self) -> np.ndarray:
+        """Every node `edges` index: the source, the sinks, then the relay robots."""
+        return np.vstack(
+            [self.source_m.reshape(1, 2), self.sinks_m.reshape(-1, 2), self.positions_m.reshape(-1, 2)]
+        )
+
+    def link_margins_db(self) -> np.ndarray | None:
+        """Each edge's link margin (dB beyond sensitivity + fade margin), with the antenna heights the
+        simulator uses: a robot's mast, or the source's for a source or sink end. None without a radio."""
+        if self.radio is None or not len(self.edges):
+            return None if self.radio is None else np.empty(0)
+        fixed = 1 + len(self.sinks_m.reshape(-1, 2))
+        high = self.radio.tx_height_m if self.fixed_height_m is None else self.fixed_height_m
+        out = []
+        for (a, b), d in zip(self.edges, self.hop_lengths_m, strict=True):
+            ha = high if a < fixed else self.radio.tx_height_m
+            hb = high if b < fixed else self.radio.rx_height_m
+            radio = dataclasses.replace(self.radio, tx_height_m=ha, rx_height_m=hb)
+            out.append(float(link_margin_db(max(float(d), 1e-3), radio)))
+        return np.array(out)
 
 
 @dataclass
@@ -121,6 +146,10 @@ class MissionPlan:
     relay: RelayPlanOut | None
     costmap: CostMap = field(repr=False)
     beach_map: object = field(repr=False)
+    #: where the plan came from, so a report can find the map again: mission, map and terrain files
+    source: dict = field(default_factory=dict)
+    #: the mission's success criteria (`Success`), for the plan report's verdict
+    criteria: dict = field(default_factory=dict)
 
     @property
     def expected_coverage(self) -> float | None:
@@ -158,6 +187,12 @@ class MissionPlan:
                 "edges": r.edges.tolist(),
                 "max_hop_m": float(r.hop_lengths_m.max()) if len(r.hop_lengths_m) else 0.0,
             }
+            margins = r.link_margins_db()
+            if margins is not None:
+                relay["link_margins_db"] = margins.tolist()
+                relay["min_margin_db"] = float(margins.min()) if len(margins) else None
+                relay["radio"] = dataclasses.asdict(r.radio)
+                relay["fixed_height_m"] = r.fixed_height_m
         out = {
             "mission": self.mission,
             "map": self.map,
@@ -197,6 +232,10 @@ class MissionPlan:
             "expected_coverage": self.expected_coverage,
             "summary": self.summary(),
         }
+        if self.source:
+            out["source"] = dict(self.source)
+        if self.criteria:
+            out["criteria"] = dict(self.criteria)
         return _rounded(out)
 
 
@@ -353,7 +392,16 @@ def _slots(mission: Mission, free: _Free) -> tuple[list[_Slot], list[SearchPlan]
                 redundancy=task.redundancy,
             )
             relay_out = RelayPlanOut(
-                label, source, sinks, range_m, task.redundancy, rp.positions_m, rp.edges, rp.hop_lengths_m
+                label,
+                source,
+                sinks,
+                range_m,
+                task.redundancy,
+                rp.positions_m,
+                rp.edges,
+                rp.hop_lengths_m,
+                radio=radio,
+                fixed_height_m=task.radio.source_antenna_height_m,
             )
             for p in rp.positions_m:
                 slots.append(_Slot("relay", label, free.snap(p)))
@@ -518,7 +566,23 @@ def plan_mission(
         rp.length_m = offshore + float(np.hypot(*np.diff(wp, axis=0).T).sum()) if len(wp) > 1 else offshore
         robots.append(rp)
     name = mission.name or "mission"
-    return MissionPlan(name, bm.name, seed, robots, searches, relay, cm, bm)
+    return MissionPlan(
+        name, bm.name, seed, robots, searches, relay, cm, bm, _source(mission), mission.success.model_dump()
+    )
+
+
+def _source(mission: Mission) -> dict:
+    """The mission, map and terrain files (absolute), when the mission was loaded from a file."""
+    out: dict[str, str | None] = {}
+    if mission.source is not None:
+        out["mission_file"] = str(Path(mission.source).resolve())
+    try:
+        out["map_file"] = str(Path(mission.resolved("map_path")).resolve())
+        terrain = mission.resolved("terrain_path")
+        out["terrain_file"] = None if terrain is None else str(Path(terrain).resolve())
+    except KeyError:
+        pass
+    return out
 
 
 # --- output -------------------------------------------------------------------------------------------

@@ -1,140 +1,392 @@
-"""A mission plan as a report: `report.md` (summary and robot tables) and a self-contained
-`report.html` (the map with routes by role, search tracks and the relay graph as an embedded PNG,
-and the same tables)."""
+"""A mission plan as a report (`Report`: report.json, report.md, report.html): the verdict a plan can
+give against the success criteria (expected detection per search area, relay links that close),
+the summary, search, relay-link and robot tables, and the figures of `swarm.report.plan_figures`
+(the map with routes by role, search swaths and relay margins; the relay graph; arrival timeline).
+
+The numbers come from the plan's own JSON (`MissionPlan.as_dict`, i.e. plan.json), so a report
+built from a plan in memory and one rebuilt from plan.json on disk say the same thing.
+
+```python
+write_plan(plan, out)          # plan.json, plan.geojson
+write_plan_report(plan, out)   # report.html, report.md, report.json
+```
+"""
 
 from __future__ import annotations
 
-import html
-import io
+import math
 from pathlib import Path
 
 import numpy as np
-from matplotlib.lines import Line2D
 
-from swarm.files import write_text_atomic
 from swarm.mission.plan import MissionPlan
-from swarm.report.html_page import html_figure, html_page, html_table, md_table
-from swarm.report.map_figure import figure_size, plot_map
-from swarm.report.style import OKABE_ITO, ROLE_COLOURS, new_figure, plt
+from swarm.report import plan_figures as figs
+from swarm.report.document import MISSING, Figure, Report, Table, header, verdict
+
+#: The verdict when nothing a plan can check applies.
+NO_VERDICT = "plan only: no verdict (only a simulation can tell whether the mission succeeds)"
+
+
+def _length(points: list) -> float:
+    xy = np.asarray(points, dtype=float).reshape(-1, 2)
+    return float(np.hypot(*np.diff(xy, axis=0).T).sum()) if len(xy) > 1 else 0.0
+
+
+def _robots(d: dict) -> list[dict]:
+    out = []
+    for b in d.get("robots", []):
+        ground = b.get("ground_m") or []
+        goal = ground[-1] if ground else b["sea_leg_m"][-1]
+        out.append(
+            {
+                "id": b["id"],
+                "role": b["role"],
+                "task": b.get("task"),
+                "launch_m": list(b["launch_m"]),
+                "goal_m": list(goal),
+                "release_s": b["release_s"],
+                "sea_time_s": b["sea_time_s"],
+                "ground_time_s": b["ground_time_s"],
+                "eta_s": b["eta_s"],
+                "length_m": b["length_m"],
+            }
+        )
+    return out
+
+
+def _search(d: dict) -> list[dict]:
+    return [
+        {
+            "task": s["task"],
+            "area": s.get("area"),
+            "searchers": len(s.get("tracks_m", [])),
+            "spacing_m": s["spacing_m"],
+            "sweep_width_m": s["sweep_width_m"],
+            "model": s["model"],
+            "expected_detection": s["expected_detection"],
+            "swath_coverage": s["swath_coverage"],
+            "track_length_m": round(sum(_length(t) for run in s.get("tracks_m", []) for t in run), 1),
+        }
+        for s in d.get("search", [])
+    ]
+
+
+def _relay(d: dict) -> dict | None:
+    r = d.get("relay")
+    if not r:
+        return None
+    sinks, positions = r.get("sinks_m", []), r.get("positions_m", [])
+    names = figs.node_names(len(sinks), len(positions))
+    nodes = np.array([r["source_m"], *sinks, *positions], dtype=float).reshape(-1, 2)
+    margins = r.get("link_margins_db")
+    links = []
+    for k, (a, b) in enumerate(r.get("edges", [])):
+        links.append(
+            {
+                "from": names[a],
+                "to": names[b],
+                "length_m": round(float(np.hypot(*(nodes[a] - nodes[b]))), 1),
+                "margin_db": None if margins is None else round(float(margins[k]), 1),
+            }
+        )
+    return {
+        "task": r["task"],
+        "comm_range_m": r["comm_range_m"],
+        "redundancy": r["redundancy"],
+        "relays": len(positions),
+        "max_hop_m": r.get("max_hop_m"),
+        "min_margin_db": None if r.get("min_margin_db") is None else round(float(r["min_margin_db"]), 1),
+        "fixed_height_m": r.get("fixed_height_m"),
+        "links": links,
+    }
+
+
+def _checks(search: list[dict], relay: dict | None, criteria: dict) -> list[dict]:
+    """What a plan can hold against the success criteria: each search area's expected detection
+    against min_detection_fraction, and every relay link closing (margin >= 0 dB)."""
+    out = []
+    target = criteria.get("min_detection_fraction")
+    if target is not None:
+        for s in search:
+            out.append(
+                {
+                    "criterion": f"expected detection ({s['task']})",
+                    "value": s["expected_detection"],
+                    "target": target,
+                    "unit": "fraction",
+                    "met": s["expected_detection"] >= target - 1e-12,
+                }
+            )
+    if relay is not None and relay["min_margin_db"] is not None:
+        out.append(
+            {
+                "criterion": f"least relay link margin ({relay['task']})",
+                "value": relay["min_margin_db"],
+                "target": 0.0,
+                "unit": "dB",
+                "met": relay["min_margin_db"] >= 0.0,
+            }
+        )
+    return out
+
+
+def _check_value(c: dict, key: str) -> str:
+    x = c[key]
+    return f"{x:.1%}" if c["unit"] == "fraction" else f"{x:.1f} dB"
+
+
+def _verdict(checks: list[dict]) -> dict:
+    if not checks:
+        return verdict(NO_VERDICT, "none")
+    parts = [
+        f"{c['criterion']} {_check_value(c, 'value')} {'>=' if c['met'] else '<'} {_check_value(c, 'target')}"
+        for c in checks
+    ]
+    met = all(c["met"] for c in checks)
+    lead = "PLAN MEETS the criteria a plan can check" if met else "PLAN FALLS SHORT"
+    return verdict(f"{lead}: {'; '.join(parts)}", "met" if met else "not met", checks=checks)
+
+
+def plan_data(d: dict, date: str | None = None) -> dict:
+    """The plan report's numbers (report.json) from a plan's JSON dict (plan.json)."""
+    search, relay = _search(d), _relay(d)
+    checks = _checks(search, relay, d.get("criteria") or {})
+    s = d.get("summary", {})
+    return {
+        "header": header("plan", d.get("mission"), d.get("map"), d.get("seed"), date),
+        "verdict": _verdict(checks),
+        "summary": {
+            "robots": s.get("robots", len(d.get("robots", []))),
+            "roles": s.get("roles", {}),
+            "first_arrival_s": s.get("first_arrival_s"),
+            "last_arrival_s": s.get("last_arrival_s"),
+            "total_length_m": s.get("total_length_m"),
+            "relays": s.get("relays", 0),
+            "search_tracks_m": s.get("search_tracks_m", 0.0),
+            "expected_coverage": d.get("expected_coverage"),
+        },
+        "search": search,
+        "relay": relay,
+        "robots": _robots(d),
+        "source": d.get("source", {}),
+    }
+
+
+def _num(x: object, spec: str, unit: str = "") -> str:
+    if x is None or (isinstance(x, float) and not math.isfinite(x)):
+        return MISSING
+    return f"{format(x, spec)}{unit}"
+
+
+def summary_table(data: dict) -> list[list[str]]:
+    """What the plan adds up to: robots by role, arrivals, route length, relays, search."""
+    s = data["summary"]
+    rows = [
+        ["robots", str(s["robots"])],
+        ["roles", ", ".join(f"{k} {v}" for k, v in s["roles"].items()) or MISSING],
+        ["first arrival", _num(s["first_arrival_s"], ".0f", " s")],
+        ["last arrival", _num(s["last_arrival_s"], ".0f", " s")],
+        ["total route length", _num(s["total_length_m"], ".0f", " m")],
+    ]
+    r = data["relay"]
+    if r is not None:
+        rows.append(
+            [
+                "relays",
+                f"{r['relays']} (range {r['comm_range_m']:.0f} m, longest hop "
+                f"{_num(r['max_hop_m'], '.0f')} m, least link margin {_num(r['min_margin_db'], '.1f')} dB)",
+            ]
+        )
+    for sp in data["search"]:
+        rows.append(
+            [
+                f"search {sp['task']}",
+                f"{sp['searchers']} searchers, spacing {sp['spacing_m']:g} m, W {sp['sweep_width_m']:g} m, "
+                f"expected detection {sp['expected_detection']:.1%} ({sp['model']}), swath coverage "
+                f"{sp['swath_coverage']:.1%}",
+            ]
+        )
+    if s["expected_coverage"] is not None:
+        rows.append(["expected coverage", f"{s['expected_coverage']:.1%}"])
+    return rows
+
+
+def check_table(data: dict) -> list[list[str]]:
+    rows = [["criterion", "plan", "target", "met"]]
+    for c in data["verdict"].get("checks", []):
+        rows.append(
+            [c["criterion"], _check_value(c, "value"), _check_value(c, "target"), "yes" if c["met"] else "NO"]
+        )
+    return rows
+
+
+def search_table(data: dict) -> list[list[str]]:
+    rows = [
+        [
+            "task",
+            "searchers",
+            "spacing (m)",
+            "sweep width (m)",
+            "sensor",
+            "expected detection",
+            "swath coverage",
+            "track length (m)",
+        ]
+    ]
+    for s in data["search"]:
+        rows.append(
+            [
+                s["task"],
+                str(s["searchers"]),
+                f"{s['spacing_m']:g}",
+                f"{s['sweep_width_m']:g}",
+                s["model"],
+                f"{s['expected_detection']:.1%}",
+                f"{s['swath_coverage']:.1%}",
+                f"{s['track_length_m']:.0f}",
+            ]
+        )
+    return rows
+
+
+def link_table(data: dict) -> list[list[str]]:
+    rows = [["link", "from", "to", "length (m)", "margin (dB)"]]
+    for k, link in enumerate(data["relay"]["links"]):
+        rows.append(
+            [str(k + 1), link["from"], link["to"], f"{link['length_m']:.1f}", _num(link["margin_db"], ".1f")]
+        )
+    return rows
+
+
+def robot_table(data: dict) -> list[list[str]]:
+    rows = [
+        [
+            "robot",
+            "role",
+            "task",
+            "launch (m)",
+            "goal (m)",
+            "release (s)",
+            "swim (s)",
+            "drive (s)",
+            "ETA (s)",
+            "route (m)",
+        ]
+    ]
+    for b in data["robots"]:
+        rows.append(
+            [
+                b["id"],
+                b["role"],
+                b["task"] or MISSING,
+                f"({b['launch_m'][0]:.1f}, {b['launch_m'][1]:.1f})",
+                f"({b['goal_m'][0]:.1f}, {b['goal_m'][1]:.1f})",
+                f"{b['release_s']:.0f}",
+                f"{b['sea_time_s']:.0f}",
+                f"{b['ground_time_s']:.0f}",
+                f"{b['eta_s']:.0f}",
+                f"{b['length_m']:.0f}",
+            ]
+        )
+    return rows
 
 
 def summary_rows(plan: MissionPlan) -> list[list[str]]:
-    s = plan.summary()
-    rows = [
-        ["robots", str(s["robots"])],
-        ["roles", ", ".join(f"{k} {v}" for k, v in s["roles"].items())],
-        ["first arrival", f"{s['first_arrival_s']:.0f} s"],
-        ["last arrival", f"{s['last_arrival_s']:.0f} s"],
-        ["total route length", f"{s['total_length_m']:.0f} m"],
+    """The summary table of a plan in memory (what `swarm plan` prints)."""
+    return summary_table(plan_data(plan.as_dict()))
+
+
+def plan_report(plan: MissionPlan, *, date: str | None = None, plan_dict: dict | None = None) -> Report:
+    """The report of `plan`; `plan_dict` is its JSON (default: `plan.as_dict()`). The plan's
+    `beach_map` may be None (a map that cannot be found): the tables stay, the map figures go."""
+    d = plan_dict if plan_dict is not None else plan.as_dict()
+    data = plan_data(d, date)
+    relay = data["relay"]
+    margins = (
+        None
+        if relay is None or any(x["margin_db"] is None for x in relay["links"])
+        else [x["margin_db"] for x in relay["links"]]
+    )
+    no_map = "The map could not be found (plan.json names its file under source.map_file): no map figures."
+    blocks: list = [Table("Plan summary", summary_table(data), header=False)]
+    if data["verdict"].get("checks"):
+        blocks.append(Table("Criteria a plan can check", check_table(data)))
+    shows = [
+        (
+            "routes by role",
+            "every robot's route coloured by role",
+            "routes by role (dotted: the swim from the launch point to the entry)",
+        )
     ]
-    if plan.relay is not None:
-        r = plan.relay
-        hop = float(r.hop_lengths_m.max()) if len(r.hop_lengths_m) else 0.0
-        rows.append(
-            ["relays", f"{len(r.positions_m)} (range {r.comm_range_m:.0f} m, longest hop {hop:.0f} m)"]
+    if data["search"]:
+        shows.append(
+            (
+                "search swaths",
+                "the search tracks with their sensor swaths",
+                "search tracks with the swept band of the sensor",
+            )
         )
-    for sp in plan.search:
-        rows.append(
-            [
-                f"search {sp.task}",
-                f"{len(sp.tracks)} searchers, spacing {sp.spacing_m:g} m, W {sp.sweep_width_m:g} m, "
-                f"expected detection {sp.expected_detection:.1%} ({sp.model}), swath coverage "
-                f"{sp.swath_coverage:.1%}",
-            ]
+    if relay is not None:
+        shows.append(
+            (
+                "relay links",
+                "the relay links coloured by link margin",
+                "relay links coloured by link margin (dB)",
+            )
         )
-    return rows
-
-
-def robot_rows(plan: MissionPlan) -> list[list[str]]:
-    rows = [["robot", "role", "task", "launch (m)", "goal (m)", "ETA s", "length m"]]
-    for b in plan.robots:
-        goal = b.ground_m[-1] if len(b.ground_m) else b.sea_leg_m[-1]
-        rows.append(
-            [
-                b.id,
-                b.role,
-                b.task or "-",
-                f"({b.launch_m[0]:.1f}, {b.launch_m[1]:.1f})",
-                f"({goal[0]:.1f}, {goal[1]:.1f})",
-                f"{b.eta_s:.0f}",
-                f"{b.length_m:.0f}",
-            ]
+    blocks.append(
+        Figure(
+            "Map: " + ", ".join(x[0] for x in shows),
+            lambda: figs.plan_map_png(plan, margins),
+            alt=f"Map of {data['header']['map']}: terrain colours, elevation contours and regions, with "
+            + " and ".join(x[1] for x in shows),
+            caption="Terrain by class, elevation contours (m), regions by kind; "
+            + "; ".join(x[2] for x in shows)
+            + ".",
+            absent=no_map,
         )
-    return rows
-
-
-def plan_figure_png(plan: MissionPlan) -> bytes:
-    """The map with the routes coloured by role, search tracks and relay links, as PNG bytes."""
-    bm = plan.beach_map
-    w, h = figure_size(bm.width_m, bm.height_m, 2)
-    fig, ax = new_figure(w, h, layout="constrained")
-    try:
-        plot_map(bm, None, ax=ax)
-        legend = ax.get_legend()
-        handles = list(legend.legend_handles) if legend is not None else []
-        if legend is not None:
-            legend.remove()
-        for sp in plan.search:
-            for run in sp.tracks:
-                for t in run:
-                    xy = np.asarray(t.coords)
-                    ax.plot(xy[:, 0], xy[:, 1], "-", color="#333333", lw=0.4, alpha=0.6, zorder=6)
-        if plan.search:
-            handles.append(Line2D([], [], color="#333333", lw=0.6, label="search tracks"))
-        seen = set()
-        for b in plan.robots:
-            xy = np.vstack([b.sea_leg_m, b.ground_m.reshape(-1, 2)])
-            colour = ROLE_COLOURS[b.role]
-            ax.plot(xy[:2, 0], xy[:2, 1], ":", color=colour, lw=1.0, zorder=7)
-            ax.plot(xy[1:, 0], xy[1:, 1], "-", color=colour, lw=1.4, zorder=8)
-            ax.plot(xy[-1, 0], xy[-1, 1], "s", ms=4, color=colour, mec="white", zorder=9)
-            if b.role not in seen:
-                seen.add(b.role)
-                handles.append(Line2D([], [], color=colour, lw=1.6, label=f"route: {b.role}"))
-        if plan.relay is not None:
-            r = plan.relay
-            nodes = np.vstack([r.source_m[None, :], r.sinks_m, r.positions_m.reshape(-1, 2)])
-            for a, c in r.edges:
-                ax.plot(*nodes[[a, c]].T, "--", color=OKABE_ITO["purple"], lw=1.0, zorder=7)
-            ax.plot(*nodes.T, "o", ms=4, color=OKABE_ITO["purple"], mec="white", zorder=9)
-            handles.append(Line2D([], [], color=OKABE_ITO["purple"], ls="--", label="relay links"))
-        ax.set_title(f"{plan.mission} on {bm.name}: routes (dotted: sea leg), seed {plan.seed}", fontsize=9)
-        fig.legend(handles=handles, loc="outside lower center", ncol=4, fontsize=7, frameon=False)
-        buf = io.BytesIO()
-        fig.savefig(
-            buf, format="png", dpi=110, bbox_inches="tight", pad_inches=0.08, metadata={"Software": None}
-        )
-        return buf.getvalue()
-    finally:
-        plt.close(fig)
-
-
-def write_plan_report(plan: MissionPlan, out_dir: str | Path) -> dict[str, Path]:
-    """Write report.md and report.html into `out_dir`; returns their paths."""
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    summary, robots = summary_rows(plan), robot_rows(plan)
-    title = f"Mission plan: {plan.mission} on {plan.map} (seed {plan.seed})"
-    md = "\n\n".join(
-        [
-            f"# {title}",
-            "## Summary",
-            md_table(summary, header=False),
-            "## Robots",
-            md_table(robots),
-            "Files: plan.json (every waypoint), plan.geojson (routes, regions, tracks, relay links), "
-            "report.html (with the map).",
-        ]
     )
-    page = html_page(
-        title,
-        [
-            f"<h1>{html.escape(title)}</h1><h2>Summary</h2>{html_table(summary, header=False)}",
-            html_figure("Map", plan_figure_png(plan)),
-            f"<h2>Robots</h2>{html_table(robots)}",
-        ],
+    if data["search"]:
+        blocks.append(Table("Search", search_table(data)))
+    if relay is not None:
+        note = (
+            f"{relay['relays']} relay robots, communication range {relay['comm_range_m']:.0f} m, redundancy "
+            f"{relay['redundancy']}. Link margin: received power beyond sensitivity and fade margin, with "
+            "the robots' antenna heights (the source's and sinks' own at those ends); >= 0 dB closes."
+        )
+        blocks.append(Table("Relay links", link_table(data), note=note))
+        blocks.append(
+            Figure(
+                "Relay graph and link margins",
+                lambda: figs.relay_png(plan, margins),
+                alt="Close-up of the relay graph: source, sinks and relay robots on the map, each link "
+                "labelled with its margin in dB",
+                caption="Nodes: the offshore source, the sinks inland and the relay robots (R1, R2, ...); "
+                "each link labelled with its margin in dB.",
+                absent=no_map,
+            )
+        )
+    blocks.append(
+        Figure(
+            "Arrival timeline",
+            lambda: figs.arrival_png(data["robots"]),
+            alt="Arrival timeline: one bar per robot from its release, swimming then driving, to its ETA, "
+            "coloured by role",
+            caption="Each robot from its release: the swim to its entry (hatched), then the drive to its "
+            "goal (solid), ending at its ETA.",
+        )
     )
-    paths = {"report.md": out / "report.md", "report.html": out / "report.html"}
-    write_text_atomic(paths["report.md"], md + "\n")
-    write_text_atomic(paths["report.html"], page)
-    return paths
+    blocks.append(Table("Robots", robot_table(data)))
+    h = data["header"]
+    return Report(
+        "plan",
+        f"Mission plan: {h['mission']} on {h['map']} (seed {h['seed']})",
+        data,
+        blocks,
+        files_note="Data: plan.json (every waypoint), plan.geojson (routes, regions, tracks, relay links).",
+    )
+
+
+def write_plan_report(plan: MissionPlan, out_dir: str | Path, *, date: str | None = None) -> dict[str, Path]:
+    """Write report.html, report.md and report.json into `out_dir`; returns their paths."""
+    return plan_report(plan, date=date).write_all(out_dir)

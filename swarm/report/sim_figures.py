@@ -79,6 +79,11 @@ def robot_roles(log: MissionLog) -> list[str]:
     return [b.role for b in log.plan.robots]
 
 
+def has_map(log: MissionLog) -> bool:
+    """Whether the log carries its plan with the map (a log read back without its map does not)."""
+    return log.plan is not None and getattr(log.plan, "beach_map", None) is not None
+
+
 def _map_figure(
     log: MissionLog, legend_rows: int = 2, bounds: tuple[float, float, float, float] | None = None
 ):
@@ -132,7 +137,7 @@ def _loss_markers(ax, log: MissionLog, size: float = 60.0) -> list:
 
 def trajectories_png(log: MissionLog) -> bytes | None:
     """(a) Executed paths coloured by role over the planned routes (faint), losses by cause."""
-    if log.plan is None:
+    if not has_map(log):
         return None
     fig, ax, handles = _map_figure(log, 3)
     roles = robot_roles(log)
@@ -161,7 +166,7 @@ def trajectories_png(log: MissionLog) -> bytes | None:
 
 def losses_map_png(log: MissionLog) -> bytes | None:
     """(b) Where robots were lost, a marker per cause; None when no robot was lost."""
-    if log.plan is None or not log.losses:
+    if not has_map(log) or not log.losses:
         return None
     fig, ax, handles = _map_figure(log, 3)
     for i in range(len(log.robots)):
@@ -224,7 +229,7 @@ def _zoom(log: MissionLog) -> tuple[float, float, float, float]:
 def mines_png(log: MissionLog) -> bytes | None:
     """(c) Mines detected, marked, set off and cleared against the truth, zoomed on the search area;
     None when there were neither mines nor detections."""
-    if log.plan is None or (not len(log.mines_m) and not len(log.objects_m)):
+    if not has_map(log) or (not len(log.mines_m) and not len(log.objects_m)):
         return None
     fig, ax, handles = _map_figure(log, 3, _zoom(log))
     roles = robot_roles(log)

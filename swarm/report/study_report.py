@@ -1,27 +1,26 @@
-"""A Monte Carlo study as a report: `report.md` (the answer and the tables) and a self-contained
-`report.html` (the same, plus the figures of `swarm.report.study_figures` as embedded PNG; no network).
+"""A Monte Carlo study as a report (`Report`: report.json, report.md, report.html): the answer (the
+required value for the target, the verdict), the study, point and loss tables, and the figures of
+`swarm.report.study_figures` (success against the swept key with interval bars, losses by cause and
+phase, where robots were lost, time-to-success histograms).
 
 ```python
-write_study_report(study_dir, table, summary, beach_map)   # report.md, report.html
+write_study_report(study_dir, table, summary, beach_map)   # report.html, report.md, report.json
 ```
 
 `summary` is the study's summary.json as a dict, `table` its results table (`swarm.studies.table`).
-The tables here (`header_rows`, `study_rows`, `loss_rows`) and the sentence `answer` are also what
+The tables here (`settings_rows`, `study_rows`, `loss_rows`) and the sentence `answer` are also what
 `swarm study` prints, so the terminal and the report always say the same thing.
 """
 
 from __future__ import annotations
 
-import datetime
-import html
 import math
 from pathlib import Path
 
 import pyarrow as pa
 
-from swarm.files import write_text_atomic
 from swarm.report import study_figures as figs
-from swarm.report.html_page import html_figure, html_page, html_table, md_table
+from swarm.report.document import Figure, Report, Table, Text, header, jsonable, verdict
 from swarm.report.study_figures import KEY_NOUNS, format_value, point_label, swept_keys
 from swarm.sim.hazards import CAUSE_DESCRIPTIONS, CAUSES
 from swarm.world.beachmap import BeachMap
@@ -86,8 +85,8 @@ def answered(summary: dict) -> bool:
     return (summary.get("required") or {}).get("value") is not None
 
 
-def header_rows(summary: dict) -> list[list[str]]:
-    """What was studied, how and when: mission, map, seed, runs, sweep, target, backend, version, date."""
+def settings_rows(summary: dict) -> list[list[str]]:
+    """How the study ran: runs, sweep, target, backend, and when and with which version it ran."""
     points = summary.get("points") or []
     runs = figs.total_runs(summary)
     per = summary.get("runs_per_point")
@@ -99,9 +98,6 @@ def header_rows(summary: dict) -> list[list[str]]:
     workers = summary.get("workers")
     backend = str(summary.get("backend", "unknown")) + (f", {workers} workers" if workers else "")
     return [
-        ["mission", str(summary.get("mission", "unknown"))],
-        ["map", str(summary.get("map", "unknown"))],
-        ["seed", str(summary.get("seed", "unknown"))],
         ["runs", runs_text],
         ["swept", swept or "nothing (one point)"],
         [
@@ -111,8 +107,8 @@ def header_rows(summary: dict) -> list[list[str]]:
             else MISSING,
         ],
         ["backend", backend],
-        ["surf-swarm", str(summary.get("version", "unknown"))],
-        ["date", str(summary.get("date", "unknown"))],
+        ["study run on", str(summary.get("date") or "unknown")],
+        ["study run with", f"surf-swarm {summary.get('version', 'unknown')}"],
     ]
 
 
@@ -219,68 +215,128 @@ def figures(
     table: pa.Table, summary: dict, beach_map: BeachMap | None
 ) -> list[tuple[str, bytes | None, str]]:
     """(heading, PNG or None, what to say when it is None) of every figure, in report order."""
-    no_map = "No map given." if beach_map is None else "No robot was lost."
+    return [(f.heading, f.make(), f.absent) for f in _figures(table, summary, beach_map)]
+
+
+def _figures(
+    table: pa.Table, summary: dict, beach_map: BeachMap | None, no_map: str = "No map given."
+) -> list:
+    lost = "No robot was lost."
     return [
-        ("Success probability", figs.success_png(summary), "No parameter points."),
-        ("Robots lost per run, by cause and phase", figs.losses_png(summary), "No robot was lost."),
-        ("Where robots were lost", figs.loss_map_png(table, beach_map), no_map),
-        ("Time to success", figs.completion_png(table, summary), "No runs in the results table."),
+        Figure(
+            "Success probability",
+            lambda: figs.success_png(summary),
+            alt="Success probability against the swept parameter, with Wilson interval bars, the target "
+            "and the required value",
+            absent="No parameter points.",
+        ),
+        Figure(
+            "Robots lost per run, by cause and phase",
+            lambda: figs.losses_png(summary),
+            alt="Stacked bars of robots lost per run by cause, by phase and by parameter point",
+            absent=lost,
+        ),
+        Figure(
+            "Where robots were lost",
+            lambda: figs.loss_map_png(table, beach_map),
+            alt="Heat map of where robots were lost over the map, with loss markers by cause",
+            absent=no_map if beach_map is None else lost,
+        ),
+        Figure(
+            "Time to success",
+            lambda: figs.completion_png(table, summary),
+            alt="Histograms of the mission time to success at each parameter point",
+            absent="No runs in the results table.",
+        ),
     ]
 
 
-def _sections(summary: dict) -> list[tuple[str, list[list[str]], bool]]:
-    """(heading, rows, has a header row) of every table, in report order."""
-    out = [("Study", header_rows(summary), False), ("Parameter points", study_rows(summary), True)]
-    losses = loss_rows(summary)
+def _status(summary: dict) -> str:
+    """met when the study found its required value (or its one point reaches the target), not met
+    when it looked and found none, none when there is nothing to judge."""
+    if answered(summary):
+        return "met"
+    if (summary.get("required") or {}).get("note"):
+        return "not met"
+    points = summary.get("points") or []
+    target = _number(summary.get("target"))
+    if len(points) == 1 and target is not None and _number(points[0].get("wilson_low")) is not None:
+        return "met" if points[0]["wilson_low"] >= target else "not met"
+    return "not met" if points else "none"
+
+
+#: Summary keys the report keeps (its tables and figures read them under the same names).
+SUMMARY_KEYS = (
+    "mission_path",
+    "runs",
+    "runs_per_point",
+    "sweeps",
+    "target",
+    "confidence",
+    "backend",
+    "workers",
+    "version",
+    "points",
+    "required",
+    "losses_by_cause",
+    "losses_by_phase",
+)
+
+
+def study_data(summary: dict, date: str | None = None) -> dict:
+    """The study report's numbers (report.json): the header, the verdict, and the summary's own."""
+    sentence = answer(summary)
+    out = {
+        "header": header("study", summary.get("mission"), summary.get("map"), summary.get("seed"), date),
+        "verdict": verdict(sentence, _status(summary), required=summary.get("required")),
+        "run_date": summary.get("date"),
+    }
+    out.update({k: summary[k] for k in SUMMARY_KEYS if k in summary})
+    out["runs"] = figs.total_runs(summary)
+    return jsonable(out)
+
+
+def study_report(
+    table: pa.Table,
+    summary: dict,
+    beach_map: BeachMap | None = None,
+    *,
+    date: str | None = None,
+    no_map: str = "No map given.",
+) -> Report:
+    """The report of a study: its results `table`, `summary` (summary.json) and the mission's map
+    (None: no loss map, the page says `no_map`). `date` defaults to the day the study ran."""
+    data = study_data(summary, date or summary.get("date"))
+    note = (summary.get("required") or {}).get("note") if answered(summary) else None
+    blocks: list = []
+    if note:
+        blocks.append(Text("How the answer was found", str(note)))
+    blocks.append(Table("Study", settings_rows(summary), header=False))
+    blocks.append(Table("Parameter points", study_rows(data)))
+    losses = loss_rows(data)
     if losses:
-        out.append(("Losses by cause and phase, all runs", losses, True))
-    return out
+        blocks.append(Table("Losses by cause and phase, all runs", losses))
+    blocks += _figures(table, summary, beach_map, no_map)
+    h = data["header"]
+    return Report(
+        "study",
+        f"Mission study: {h['mission'] or 'unknown'} on {h['map'] or 'unknown'} "
+        f"(seed {h['seed'] if h['seed'] is not None else '?'}, {data['runs']} runs)",
+        data,
+        blocks,
+        files_note="Data: results.parquet (one row per run), summary.json, study.json.",
+    )
 
 
 def write_study_report(
-    study_dir: str | Path, table: pa.Table, summary: dict, beach_map: BeachMap | None = None
+    study_dir: str | Path,
+    table: pa.Table,
+    summary: dict,
+    beach_map: BeachMap | None = None,
+    *,
+    date: str | None = None,
 ) -> dict[str, Path]:
-    """Write report.md and report.html into `study_dir` (created), atomically; returns their paths.
-    The date is the summary's (when the study ran), so the same study gives the same report."""
-    out = Path(study_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    summary = {
-        **summary,
-        "date": summary.get("date") or datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%d"),
-    }
-    title = (
-        f"Mission study: {summary.get('mission', 'unknown')} on {summary.get('map', 'unknown')} "
-        f"(seed {summary.get('seed', '?')}, {figs.total_runs(summary)} runs)"
-    )
-    sentence = answer(summary)
-    note = (summary.get("required") or {}).get("note") if answered(summary) else None
-    tables = _sections(summary)
-
-    md = [f"# {title}", f"**{sentence}.**" if not sentence.endswith(".") else f"**{sentence}**"]
-    if note:
-        md.append(str(note))
-    for heading, rows, header in tables:
-        md += [f"## {heading}", md_table(rows, header=header)]
-    md.append(
-        "Figures (success probability, losses by cause and phase, where robots were lost, time to "
-        "success): report.html."
-    )
-
-    colour = "#009E73" if answered(summary) else "#D55E00"
-    body = [
-        f"<h1>{html.escape(title)}</h1>",
-        f"<p style='font-size:20px;font-weight:bold;color:{colour}'>{html.escape(sentence)}</p>",
-    ]
-    if note:
-        body.append(f"<p>{html.escape(str(note))}</p>")
-    for heading, rows, header in tables:
-        body.append(f"<h2>{html.escape(heading)}</h2>{html_table(rows, header=header)}")
-    for heading, png, absent in figures(table, summary, beach_map):
-        if png is not None:
-            body.append(html_figure(heading, png))
-        else:
-            body.append(f"<h2>{html.escape(heading)}</h2><p>{html.escape(absent)}</p>")
-    paths = {"report.md": out / "report.md", "report.html": out / "report.html"}
-    write_text_atomic(paths["report.md"], "\n\n".join(md) + "\n")
-    write_text_atomic(paths["report.html"], html_page(title, body))
-    return paths
+    """Write report.html, report.md and report.json into `study_dir` (created), atomically; returns
+    their paths. The date defaults to the summary's (when the study ran), so the same study gives the
+    same report."""
+    return study_report(table, summary, beach_map, date=date).write_all(study_dir)

@@ -3,6 +3,7 @@
 ```python
 log = simulate(load_mission("missions/mine_clear.yaml"), seed=3)
 write_log(log, "reports/mine_clear-sim")   # trajectories.npz, events.jsonl, outcome.json
+log = read_log("reports/mine_clear-sim")    # the same log back (without its plan unless given)
 ```
 
 The log holds the trajectories as arrays sampled every `record_every_s` (time, x, y, heading,
@@ -16,6 +17,7 @@ from __future__ import annotations
 
 import io
 import json
+import zipfile
 from collections import Counter
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -23,7 +25,8 @@ from pathlib import Path
 
 import numpy as np
 
-from swarm.files import atomic_path, write_text_atomic
+from swarm.errors import InputError
+from swarm.files import atomic_path, read_text, write_text_atomic
 from swarm.mission.plan import MissionPlan
 from swarm.mission.schema import Mission
 from swarm.sim.env import SimConfig, SwarmEnv
@@ -207,3 +210,96 @@ def write_log(log: MissionLog, out_dir: str | Path) -> dict[str, Path]:
     summary = log.summary() | {"mines_state": log.mines_state}
     write_text_atomic(paths["outcome.json"], json.dumps(summary, indent=1, sort_keys=True) + "\n")
     return paths
+
+
+#: The files of a written log.
+LOG_FILES = ("trajectories.npz", "events.jsonl", "outcome.json")
+
+
+def _end_reasons(robots: list[str], events: list[dict], alive_at_end: np.ndarray) -> list[str | None]:
+    """How each robot left the mission, from the events: its loss cause, expended or recovered; a
+    robot gone without such an event was stopped at the time limit; None while still active."""
+    index = {r: i for i, r in enumerate(robots)}
+    out: list[str | None] = [None] * len(robots)
+    for ev in events:
+        i = index.get(ev.get("robot"))
+        if i is None:
+            continue
+        if ev["kind"] == "loss":
+            out[i] = ev["cause"]
+        elif ev["kind"] in ("expended", "recovered"):
+            out[i] = ev["kind"]
+    for i, alive in enumerate(alive_at_end):
+        if out[i] is None and not alive:
+            out[i] = "time_limit"
+    return out
+
+
+def _read_json_lines(path: Path, whole: bool = False) -> list:
+    """A JSON file as one value (`whole`), else JSON Lines as a list; bad JSON is an `InputError`."""
+    text = read_text(path, path.name)
+    lines = [text] if whole else text.splitlines()
+    out = []
+    for number, line in enumerate(lines, 1):
+        if not line.strip():
+            continue
+        try:
+            out.append(json.loads(line))
+        except json.JSONDecodeError as exc:
+            at = f"line {exc.lineno if whole else number}"
+            raise InputError(path, at, exc.msg, "JSON written by swarm simulate") from None
+    if whole and not out:
+        raise InputError(path, "(file)", "nothing", "JSON written by swarm simulate")
+    return out
+
+
+def read_log(out_dir: str | Path, plan: MissionPlan | None = None) -> MissionLog:
+    """The log `write_log` wrote into `out_dir`, with `plan` attached (plan.json is read by
+    `swarm.report.load`, which can find the map). A missing or damaged file is an `InputError`."""
+    out = Path(out_dir)
+    for name in LOG_FILES:
+        if not (out / name).is_file():
+            raise InputError(
+                out, name, "no such file", f"a simulation log folder with {', '.join(LOG_FILES)}"
+            )
+    summary = _read_json_lines(out / "outcome.json", whole=True)[0]
+    events = _read_json_lines(out / "events.jsonl")
+    where = out / "trajectories.npz"
+    try:
+        with np.load(where, allow_pickle=False) as npz:
+            arrays = {k: npz[k] for k in npz.files}
+        robots = [str(r) for r in arrays["robots"]]
+        n = len(robots)
+        times = arrays["times_s"]
+        role = arrays["role"] if len(arrays["role"]) else None
+        alive = arrays["alive"].astype(bool).reshape(len(times), n)
+        log = MissionLog(
+            mission=str(summary["mission"]),
+            map=str(summary["map"]),
+            seed=int(summary["seed"]),
+            robots=robots,
+            times_s=times,
+            xy_m=arrays["xy_m"].reshape(len(times), n, 2),
+            heading_rad=arrays["heading_rad"].reshape(len(times), n),
+            alive=alive,
+            phase=arrays["phase"].reshape(len(times), n),
+            events=events,
+            outcome={"success": bool(summary["success"]), "criteria": summary["criteria"]},
+            losses=[
+                {k: ev[k] for k in ("robot", "cause", "phase", "t_s", "x_m", "y_m")}
+                for ev in events
+                if ev.get("kind") == "loss"
+            ],
+            mines_m=arrays["mines_m"].reshape(-1, 2),
+            mines_state={k: list(v) for k, v in (summary.get("mines_state") or {}).items()},
+            objects_m=arrays["objects_m"].reshape(-1, 2),
+            object_mine=arrays["object_mine"],
+            plan=plan,
+            role=role,
+            completed_s=summary.get("completed_s"),
+        )
+        log.end_reasons = _end_reasons(robots, events, alive[-1] if len(alive) else np.ones(n, bool))
+    except (OSError, ValueError, KeyError, TypeError, AttributeError, zipfile.BadZipFile) as exc:
+        found = f"{type(exc).__name__}: {exc}" if str(exc) else type(exc).__name__
+        raise InputError(where, "(contents)", found, "a log written by swarm simulate") from None
+    return log

@@ -29,8 +29,8 @@ from swarm.studies.store import ResultStore
 from swarm.studies.sweep import Sweep, check_points, points
 from swarm.studies.table import schema
 
-#: Interval widths the summary says how many runs would reach.
-WIDTHS = (0.1, 0.05)
+#: Interval half-widths (±) the summary says how many runs would reach.
+HALF_WIDTHS = (0.1, 0.05)
 #: Runs per stored chunk, at most (a kill loses at most the runs in flight and one chunk's worth).
 CHUNK_RUNS = 20
 
@@ -174,8 +174,11 @@ def summarize(spec: StudySpec, table: pa.Table) -> dict:
                 "losses_by_cause": by_cause,
                 "losses_by_phase": by_phase,
                 "lost_mean": float(np.mean([len(losses[i]) for i in mine])) if n else 0.0,
-                "runs_for_width": {
-                    f"{w:g}": stats.runs_for_width(rate, w, spec.confidence) if n else None for w in WIDTHS
+                # total runs for a Wilson interval of ± h at the observed rate, and how many more
+                "runs_for_width": {f"{h:g}": _runs_for(rate, h, spec.confidence, n) for h in HALF_WIDTHS},
+                "more_runs_for_width": {
+                    f"{h:g}": max(0, _runs_for(rate, h, spec.confidence, n) - n) if n else None
+                    for h in HALF_WIDTHS
                 },
             }
         )
@@ -195,6 +198,10 @@ def summarize(spec: StudySpec, table: pa.Table) -> dict:
         "losses_by_phase": by_phase,
         "version": getattr(swarm, "__version__", "unknown"),
     }
+
+
+def _runs_for(rate: float, half_width: float, confidence: float, n: int) -> int | None:
+    return stats.runs_for_width(rate, 2 * half_width, confidence) if n else None
 
 
 def _loss_counts(per_run) -> tuple[dict[str, int], dict[str, dict[str, int]]]:

@@ -226,7 +226,7 @@ def report(tmp_path_factory, study, beach_map):
 
 def test_report_files_exist_and_figures_decode(report):
     paths, _, page = report
-    assert set(paths) == {"report.md", "report.html"}
+    assert set(paths) == {"report.md", "report.html", "report.json"}
     assert all(p.is_file() and p.stat().st_size > 0 for p in paths.values())
     assert not [p for p in paths["report.md"].parent.iterdir() if p.name.startswith(".")]  # no temp left
     images = re.findall(r"data:image/png;base64,([A-Za-z0-9+/=]+)", page)

@@ -1,0 +1,275 @@
+"""Reports from files on disk: which kind of output a path is, reading it back, and its `Report`.
+
+| kind         | the folder holds                                  |
+| ---          | ---                                               |
+| `study`      | summary.json and results.parquet                  |
+| `simulation` | outcome.json, events.jsonl and trajectories.npz   |
+| `plan`       | plan.json (and no outcome.json)                   |
+| `validation` | validation.json (and validation.npz)              |
+
+PATH may be the folder or one of those files (its folder is used). The map comes back through the
+files plan.json records (`source.map_file`, `source.terrain_file`) and, for a study, the mission
+file in summary.json / study.json; a map that has moved leaves the report without map figures.
+
+```python
+report = report_for("reports/landing-sim")    # or swarm.report.build_report
+report.kind                                   # "simulation"
+report.write("reports/landing-sim/report.md")
+```
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+import pyarrow as pa
+import pyarrow.parquet as pq
+from shapely.geometry import LineString, Polygon
+
+from swarm.errors import InputError, SwarmError
+from swarm.files import read_text
+from swarm.mission.plan import MissionPlan, RelayPlanOut, RobotPlan, SearchPlan
+from swarm.planning.radio import RadioParams
+from swarm.report.document import Report
+from swarm.report.plan_report import plan_report
+from swarm.report.sim_report import sim_report
+from swarm.report.study_report import study_report
+from swarm.report.validation_report import VALIDATION_FILE, read_validation, validation_report
+from swarm.sim.run import LOG_FILES, read_log
+
+KINDS = ("plan", "simulation", "study", "validation")
+STUDY_FILES = ("summary.json", "results.parquet")
+PLAN_FILE = "plan.json"
+EXPECTED = (
+    "a plan (folder with plan.json), a simulation log (outcome.json, events.jsonl, trajectories.npz), "
+    "a study (summary.json, results.parquet) or a model validation (validation.json), or one of those files"
+)
+#: Every file whose folder may be given by naming the file.
+KNOWN_FILES = {
+    PLAN_FILE,
+    VALIDATION_FILE,
+    *LOG_FILES,
+    *STUDY_FILES,
+    "study.json",
+    "validation.npz",
+    "plan.geojson",
+}
+
+
+def detect(path: str | Path) -> tuple[str, Path]:
+    """(kind, folder) of a report input; anything else is an `InputError` naming `path`."""
+    p = Path(path)
+    if p.is_file():
+        if p.name not in KNOWN_FILES:
+            raise InputError(p, "(path)", f"a file named {p.name}", EXPECTED)
+        p = p.parent
+    elif not p.exists():
+        raise InputError(p, "(path)", "nothing there", EXPECTED)
+    elif not p.is_dir():
+        raise InputError(p, "(path)", "neither a file nor a folder", EXPECTED)
+    has = {name for name in KNOWN_FILES if (p / name).is_file()}
+    if "summary.json" in has:
+        missing = [f for f in STUDY_FILES if f not in has]
+        if missing:
+            raise InputError(
+                p, "(study)", f"summary.json without {', '.join(missing)}", "a finished study folder"
+            )
+        return "study", p
+    if "outcome.json" in has:
+        missing = [f for f in LOG_FILES if f not in has]
+        if missing:
+            raise InputError(
+                p, "(simulation)", f"outcome.json without {', '.join(missing)}", "a whole simulation log"
+            )
+        return "simulation", p
+    if PLAN_FILE in has:
+        return "plan", p
+    if VALIDATION_FILE in has:
+        return "validation", p
+    names = sorted(x.name for x in p.iterdir())
+    found = (
+        f"a folder holding {', '.join(names[:6])}{', ...' if len(names) > 6 else ''}"
+        if names
+        else "an empty folder"
+    )
+    raise InputError(p, "(folder)", found, EXPECTED)
+
+
+def read_json(path: Path, what: str) -> dict:
+    """A JSON object from `path`; anything else is an `InputError`."""
+    try:
+        data = json.loads(read_text(path, what))
+    except json.JSONDecodeError as exc:
+        raise InputError(path, f"line {exc.lineno}", exc.msg, f"valid JSON ({what})") from None
+    if not isinstance(data, dict):
+        raise InputError(path, "(top level)", type(data).__name__, f"a JSON object ({what})")
+    return data
+
+
+def load_beach_map(source: dict):
+    """The map a plan recorded (`source.map_file`, with `source.terrain_file`'s modes), or None when
+    it is not recorded or cannot be read."""
+    from swarm.robot.terrain import load_library
+    from swarm.world.io import load_map
+
+    map_file = (source or {}).get("map_file")
+    if not map_file or not Path(map_file).is_file():
+        return None
+    try:
+        return load_map(map_file, load_library(source.get("terrain_file")))
+    except SwarmError:
+        return None
+
+
+def plan_from_dict(d: dict, beach_map=None) -> MissionPlan:
+    """A `MissionPlan` rebuilt from its JSON (plan.json) for drawing: routes, search tracks and the
+    relay graph at plan.json's millimetre precision; no cost map."""
+    robots = []
+    for b in d["robots"]:
+        sea = np.asarray(b["sea_leg_m"], dtype=float).reshape(-1, 2)
+        ground = np.asarray(b["ground_m"], dtype=float).reshape(-1, 2)
+        wp = np.asarray(b["waypoints_m"], dtype=float).reshape(-1, 2)
+        track = wp[1 + (len(ground) if len(ground) else len(sea) - 1) :]
+        robots.append(
+            RobotPlan(
+                id=b["id"],
+                role=b["role"],
+                task=b.get("task"),
+                launch_m=(float(b["launch_m"][0]), float(b["launch_m"][1])),
+                release_s=float(b["release_s"]),
+                sea_leg_m=sea,
+                ground_m=ground,
+                track_m=track,
+                eta_s=float(b["eta_s"]),
+                sea_time_s=float(b["sea_time_s"]),
+                ground_time_s=float(b["ground_time_s"]),
+                length_m=float(b["length_m"]),
+            )
+        )
+    search = []
+    for s in d.get("search", []):
+        rings = s["area_m"] if s["area_m"] and isinstance(s["area_m"][0][0], list) else [s["area_m"]]
+        area = sum(Polygon(r).area for r in rings if len(r) >= 3)
+        search.append(
+            SearchPlan(
+                task=s["task"],
+                area=s.get("area", ""),
+                area_m=s["area_m"],
+                sweep_width_m=float(s["sweep_width_m"]),
+                spacing_m=float(s["spacing_m"]),
+                model=s["model"],
+                tracks=[[LineString(t) for t in run if len(t) >= 2] for run in s.get("tracks_m", [])],
+                expected_detection=float(s["expected_detection"]),
+                swath_coverage=float(s["swath_coverage"]),
+                area_m2=area,
+            )
+        )
+    relay = None
+    if d.get("relay"):
+        r = d["relay"]
+        source = np.asarray(r["source_m"], dtype=float).reshape(2)
+        sinks = np.asarray(r["sinks_m"], dtype=float).reshape(-1, 2)
+        positions = np.asarray(r["positions_m"], dtype=float).reshape(-1, 2)
+        edges = np.asarray(r["edges"], dtype=np.intp).reshape(-1, 2)
+        nodes = np.vstack([source[None, :], sinks, positions])
+        hops = np.hypot(*(nodes[edges[:, 0]] - nodes[edges[:, 1]]).T) if len(edges) else np.empty(0)
+        radio = RadioParams(**r["radio"]) if r.get("radio") else None
+        relay = RelayPlanOut(
+            r["task"],
+            source,
+            sinks,
+            float(r["comm_range_m"]),
+            int(r["redundancy"]),
+            positions,
+            edges,
+            hops,
+            radio=radio,
+            fixed_height_m=r.get("fixed_height_m"),
+        )
+    return MissionPlan(
+        d["mission"],
+        d["map"],
+        int(d["seed"]),
+        robots,
+        search,
+        relay,
+        None,
+        beach_map,
+        dict(d.get("source") or {}),
+        dict(d.get("criteria") or {}),
+    )
+
+
+def read_plan(folder: str | Path) -> tuple[MissionPlan, dict]:
+    """The plan in `folder`/plan.json (with its map when it can be found) and the JSON itself."""
+    path = Path(folder) / PLAN_FILE
+    d = read_json(path, "plan.json")
+    try:
+        return plan_from_dict(d, load_beach_map(d.get("source") or {})), d
+    except (KeyError, TypeError, ValueError, IndexError) as exc:
+        raise InputError(
+            path, "(contents)", f"{type(exc).__name__}: {exc}", "a plan.json written by swarm"
+        ) from None
+
+
+def _study_map(folder: Path, summary: dict):
+    """The study's map, through its mission file (as given, else as study.json resolved it)."""
+    from swarm.mission.load import load_mission
+
+    candidates = [summary.get("mission_path")]
+    spec = folder / "study.json"
+    if spec.is_file():
+        with contextlib.suppress(OSError, ValueError, AttributeError):
+            candidates.append(json.loads(spec.read_text(encoding="utf-8")).get("mission"))
+    for c in candidates:
+        if c and Path(c).is_file():
+            try:
+                return load_mission(c).beach_map
+            except SwarmError:
+                continue
+    return None
+
+
+def report_for(path: str | Path, *, date: str | None = None) -> Report:
+    """The report of whatever `path` holds (see the module docstring). `date` goes in the header
+    (default: today; a study's default is the day it ran). Bad input is an `InputError`."""
+    kind, folder = detect(path)
+    if kind == "plan":
+        plan, d = read_plan(folder)
+        return _guard(folder / PLAN_FILE, lambda: plan_report(plan, date=date, plan_dict=d))
+    if kind == "simulation":
+        plan = read_plan(folder)[0] if (folder / PLAN_FILE).is_file() else None
+        log = read_log(folder, plan=plan)
+        return _guard(folder / "outcome.json", lambda: sim_report(log, date=date))
+    if kind == "study":
+        summary = read_json(folder / "summary.json", "summary.json")
+        try:
+            table = pq.read_table(folder / "results.parquet")
+        except (OSError, pa.ArrowException) as exc:
+            raise InputError(
+                folder / "results.parquet", "(file)", str(exc), "a Parquet results table"
+            ) from None
+        beach = _study_map(folder, summary)
+        no_map = "No map: the study's mission file could not be found." if beach is None else "No map given."
+        return _guard(
+            folder / "summary.json", lambda: study_report(table, summary, beach, date=date, no_map=no_map)
+        )
+    v = read_validation(folder)
+    return _guard(folder / VALIDATION_FILE, lambda: validation_report(v, date=date))
+
+
+def _guard(source: Path, build: Callable[[], Report]) -> Report:
+    """Build a report; a file with missing or mistyped keys is an `InputError` naming it."""
+    try:
+        return build()
+    except (KeyError, TypeError, ValueError, IndexError, AttributeError) as exc:
+        raise InputError(
+            source, "(contents)", f"{type(exc).__name__}: {exc}", "a file written by swarm"
+        ) from None
+
+
+build_report = report_for

@@ -1,0 +1,195 @@
+"""What the reports are rebuilt from: a simulation log read back equals the log written, a plan rebuilt
+from plan.json equals the plan, relay link margins follow the link budget, the verdicts a plan and a
+validation give, and a plan whose map has gone still gives its tables."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from swarm.mission import mission_from_dict
+from swarm.mission.plan import plan_json, plan_mission, write_plan
+from swarm.planning.radio import comm_range_m, link_margin_db
+from swarm.report import build_report
+from swarm.report.load import plan_from_dict
+from swarm.report.plan_report import NO_VERDICT, plan_data
+from swarm.report.validation_report import Validation, read_validation, validation_data, write_validation
+from swarm.robot.predict import Trajectory
+from swarm.robot.validate import Score
+from swarm.sim.run import read_log, simulate, write_log
+
+REPO = Path(__file__).resolve().parents[2]
+
+
+def _mission(**success: float):
+    raw = {
+        "name": "sources",
+        "map": "../maps/test_small.yaml",
+        "planner": "../planners/fast.yaml",
+        "swarm": {"count": 6},
+        "launch": {
+            "platform": "by_hand",
+            "points": ["launch_1", "launch_2"],
+            "offshore_m": 20,
+            "interval_s": 2,
+        },
+        "phases": {
+            "sea_transit": {"time_limit_s": 150},
+            "surf_crossing": {"time_limit_s": 60},
+            "beach_operations": {"time_limit_s": 60},
+            "return_to_sea": {"enabled": False},
+        },
+        "tasks": [
+            {"type": "landing", "zones": ["landing_a"], "robots_per_zone": 1},
+            {
+                "type": "relay",
+                "source": "relay_source",
+                "sinks": ["relay_sink"],
+                "radio": {"tx_power_dbm": -10.0, "source_antenna_height_m": 2.5},
+            },
+            {"type": "search", "area": "search_beach", "sensor": {"sweep_width_m": 5.0}, "robots": 2},
+        ],
+        "success": success,
+        "hazards": {"mines": {"count": 3}, "attrition": {"mtbf_h": 0.05}},
+    }
+    return mission_from_dict(raw, REPO / "missions" / "sources.yaml")
+
+
+@pytest.fixture(scope="module")
+def mission():
+    return _mission(min_detection_fraction=0.5)
+
+
+@pytest.fixture(scope="module")
+def plan(mission):
+    return plan_mission(mission, seed=2, workers=1)
+
+
+def test_read_log_gives_back_the_log(mission, plan, tmp_path):
+    log = simulate(mission, 2, plan=plan)
+    write_log(log, tmp_path)
+    back = read_log(tmp_path)
+    assert back.plan is None and back.losses  # failures every few minutes: losses to read back
+    for name in (
+        "times_s",
+        "xy_m",
+        "heading_rad",
+        "alive",
+        "phase",
+        "role",
+        "mines_m",
+        "objects_m",
+        "object_mine",
+    ):
+        np.testing.assert_array_equal(getattr(back, name), getattr(log, name), err_msg=name)
+    assert back.robots == log.robots and back.events == log.events
+    assert back.losses == log.losses and back.mines_state == log.mines_state
+    assert back.end_reasons == log.end_reasons  # rebuilt from the events
+    assert back.summary() == json.loads(json.dumps(log.summary()))
+    assert back.outcome == json.loads(json.dumps(log.outcome))
+
+
+def test_plan_rebuilt_from_plan_json_is_the_plan(plan, tmp_path):
+    data = json.loads(plan_json(plan))
+    back = plan_from_dict(data, plan.beach_map)
+    again = back.as_dict()
+    for key in ("robots", "search", "relay", "source", "criteria", "mission", "map", "seed"):
+        assert again[key] == data[key], key
+    assert back.costmap is None and back.beach_map is plan.beach_map
+    source = data["source"]
+    assert Path(source["map_file"]).is_file() and source["map_file"].endswith("test_small.yaml")
+    assert data["criteria"]["min_detection_fraction"] == 0.5
+
+
+def test_link_margins_follow_the_link_budget(plan, mission):
+    relay = json.loads(plan_json(plan))["relay"]
+    r = plan.relay
+    margins = relay["link_margins_db"]
+    assert len(margins) == len(relay["edges"]) >= 2
+    radio = r.radio
+    fixed = 1 + len(r.sinks_m)
+    nodes = r.nodes_m
+    for (a, b), margin in zip(r.edges, margins, strict=True):
+        d = float(np.hypot(*(nodes[a] - nodes[b])))
+        assert d <= r.comm_range_m + 1e-6
+        heights = [2.5 if k < fixed else radio.tx_height_m for k in (a, b)]
+        expected = link_margin_db(
+            d, dataclasses.replace(radio, tx_height_m=heights[0], rx_height_m=heights[1])
+        )
+        assert margin == pytest.approx(float(expected), abs=1e-3)
+        if a >= fixed and b >= fixed:  # robot to robot: the planner's own budget, 0 dB at its range
+            assert margin >= -1e-6 and float(link_margin_db(r.comm_range_m, radio)) == pytest.approx(
+                0, abs=1e-6
+            )
+    assert r.comm_range_m == pytest.approx(comm_range_m(radio))
+    assert relay["min_margin_db"] == pytest.approx(min(margins), abs=1e-3)
+
+
+def test_plan_verdicts(plan):
+    data = json.loads(plan_json(plan))
+    detection = data["search"][0]["expected_detection"]
+    met = plan_data(data)["verdict"]
+    assert met["status"] == "met" and met["text"].startswith("PLAN MEETS")
+    assert f"expected detection (search_1) {detection:.1%} >= 50.0%" in met["text"]
+    short = plan_data({**data, "criteria": {"min_detection_fraction": 0.999}})["verdict"]
+    assert short["status"] == "not met" and f"{detection:.1%} < 99.9%" in short["text"]
+    negative = json.loads(json.dumps(data))
+    negative["relay"]["min_margin_db"] = -1.5
+    assert plan_data(negative)["verdict"]["status"] == "not met"
+    bare = {**data, "criteria": {}, "relay": None}
+    assert plan_data(bare)["verdict"] == {"text": NO_VERDICT, "status": "none"}
+
+
+def test_a_plan_whose_map_has_gone_keeps_its_tables(plan, tmp_path):
+    write_plan(plan, tmp_path)
+    data = json.loads((tmp_path / "plan.json").read_text())
+    data["source"]["map_file"] = str(tmp_path / "moved.yaml")
+    (tmp_path / "plan.json").write_text(json.dumps(data))
+    report = build_report(tmp_path, date="2025-01-02")
+    page = report.html()
+    assert page.count("The map could not be found") == 2  # the map and the relay close-up
+    assert page.count("data:image/png;base64,") == 1  # the arrival timeline needs no map
+    assert "robot_5" in page and "| robot_5 |" in report.markdown()
+
+
+def _straight(offset_m: float) -> tuple[Trajectory, Trajectory]:
+    t = np.linspace(0.0, 10.0, 101)
+    truth = Trajectory(t, t.copy(), np.zeros_like(t), np.zeros_like(t))
+    return truth, Trajectory(t, t.copy(), np.full_like(t, offset_m), np.zeros_like(t))
+
+
+def _validation(offset_m: float) -> Validation:
+    truth, model = _straight(offset_m)
+    score = Score(
+        "skid", "straight", "concrete", 10.0, 10.0, offset_m, offset_m, 10.0 * offset_m, offset_m, 0.0, 0.0
+    )
+    return Validation("straight", 10.0, truth, {"skid": model}, {"skid": score}, "skid", "concrete")
+
+
+@pytest.mark.parametrize(
+    ("offset_m", "status"), [(0.2, "met"), (0.29, "met"), (0.31, "not met"), (1.0, "not met")]
+)
+def test_validation_verdict_against_three_percent(offset_m, status):
+    v = validation_data(_validation(offset_m))["verdict"]
+    assert v["status"] == status
+    assert v["text"].startswith("MEETS" if status == "met" else "MISSES")
+    assert f"{10.0 * offset_m:.2f}% of the 10.00 m travelled (target < 3%)" in v["text"]
+
+
+def test_validation_files_round_trip(tmp_path):
+    v = _validation(0.2)
+    write_validation(tmp_path, v)
+    saved = json.loads((tmp_path / "validation.json").read_text())
+    assert saved["model"] == "skid" and math.isclose(saved["path_rmse_pct"], 2.0)  # what --json prints
+    back = read_validation(tmp_path)
+    assert back.scores == v.scores and back.model == "skid" and back.terrain == "concrete"
+    np.testing.assert_array_equal(back.trajectories["skid"].y_m, v.trajectories["skid"].y_m)
+    np.testing.assert_array_equal(back.truth.t_s, v.truth.t_s)
+    assert build_report(tmp_path, date="2025-01-02").json() == (
+        build_report(tmp_path / "validation.json", date="2025-01-02").json()
+    )
