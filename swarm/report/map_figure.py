@@ -17,7 +17,7 @@ from shapely.geometry.base import BaseGeometry
 from shapely.plotting import patch_from_polygon
 
 from swarm.files import atomic_path
-from swarm.report.style import REGION_STYLES, ROUTE_COLOURS, new_figure, terrain_colours
+from swarm.report.style import REGION_STYLES, ROUTE_COLOURS, as_words, new_figure, terrain_colours
 from swarm.world.beachmap import BeachMap
 
 MAX_WIDTH_IN = 14.0
@@ -40,10 +40,6 @@ def figure_size(width_m: float, height_m: float, legend_rows: int) -> tuple[floa
     fig_w = min(MAX_WIDTH_IN, max(map_w + 1.6, 7.5))
     fig_h = max(map_h, 1.2) + 1.15 + 0.2 * legend_rows + 0.25
     return fig_w, fig_h
-
-
-def _label(name: str) -> str:
-    return name.replace("_", " ")
 
 
 def _percent(fraction: float) -> str:
@@ -72,12 +68,12 @@ def _draw_region(
                 zorder=6,
             )
             handle = handle or Line2D(
-                [], [], ls="", marker=marker, ms=8, color=colour, mec="black", label=_label(kind)
+                [], [], ls="", marker=marker, ms=8, color=colour, mec="black", label=as_words(kind)
             )
         elif part.geom_type in ("LineString", "LinearRing"):
             xs, ys = part.xy
             ax.plot(xs, ys, style, color=colour, lw=2.2, zorder=5, path_effects=_HALO)
-            handle = handle or Line2D([], [], ls=style, lw=2.2, color=colour, label=_label(kind))
+            handle = handle or Line2D([], [], ls=style, lw=2.2, color=colour, label=as_words(kind))
         elif part.geom_type == "Polygon":
             hatch = "///" if kind == "keep_out" else None
             # a white outline under the coloured one keeps the edge visible on any terrain colour
@@ -96,7 +92,7 @@ def _draw_region(
                 )
             )
             handle = handle or Patch(
-                fill=False, edgecolor=colour, lw=1.6, ls=style, hatch=hatch, label=_label(kind)
+                fill=False, edgecolor=colour, lw=1.6, ls=style, hatch=hatch, label=as_words(kind)
             )
     # names sit by the shape, inside the map: below the point or top edge when near the map's top
     near_top = geom.bounds[3] > bounds[3] - 0.08 * (bounds[3] - bounds[1])
@@ -242,7 +238,7 @@ def plot_map(
             facecolor=colours[i],
             edgecolor="#555555",
             lw=0.5,
-            label=f"{_label(classes[i])} {_percent(counts[i] / total)}",
+            label=f"{as_words(classes[i])} {_percent(counts[i] / total)}",
         )
         for i in present
     ]
@@ -259,3 +255,25 @@ def plot_map(
     if own_figure:
         plt.close(fig)
     return ax
+
+
+def map_axes(
+    beach_map: BeachMap,
+    legend_rows: int,
+    bounds: tuple[float, float, float, float] | None = None,
+    extra_width_in: float = 0.0,
+) -> tuple:
+    """A new figure with the map drawn in it, sized for `bounds` (default: the whole map) and
+    `legend_rows` of legend below; returns (fig, ax, the map's legend handles) with the map's own
+    legend taken off, for the caller to add its layers and one legend for all."""
+    x0, y0, x1, y1 = bounds or beach_map.bounds_m
+    w, h = figure_size(x1 - x0, y1 - y0, legend_rows)
+    fig, ax = new_figure(w + extra_width_in, h, layout="constrained")
+    plot_map(beach_map, None, ax=ax)
+    legend = ax.get_legend()
+    handles = list(legend.legend_handles) if legend is not None else []
+    if legend is not None:
+        legend.remove()
+    ax.set_xlim(x0, x1)
+    ax.set_ylim(y0, y1)
+    return fig, ax, handles

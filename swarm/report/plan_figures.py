@@ -9,7 +9,6 @@ cividis (readable with any colour vision, and in greyscale). Robots by role also
 
 from __future__ import annotations
 
-import io
 from collections.abc import Sequence
 
 import numpy as np
@@ -24,27 +23,14 @@ from shapely.geometry.base import BaseGeometry
 from shapely.plotting import patch_from_polygon
 
 from swarm.mission.plan import MissionPlan
-from swarm.report.map_figure import figure_size, plot_map
-from swarm.report.style import OKABE_ITO, ROLE_COLOURS, new_figure, plt
+from swarm.report.map_figure import map_axes
+from swarm.report.style import OKABE_ITO, ROLE_COLOURS, new_figure, png_bytes
 
-PNG_DPI = 110
 #: Link margins on a colour-blind-safe sequential map (dark: little margin, yellow: plenty).
 MARGIN_CMAP = colormaps["cividis"]
 SWATH_ALPHA = 0.28
 #: Role order in legends and the timeline.
 ROLE_ORDER = ("landing", "search", "relay", "surveillance", "beacon", "spare")
-
-
-def _png(fig) -> bytes:
-    """The figure as PNG bytes without a timestamp (same plan, same bytes); closes it."""
-    try:
-        buf = io.BytesIO()
-        fig.savefig(
-            buf, format="png", dpi=PNG_DPI, bbox_inches="tight", pad_inches=0.08, metadata={"Software": None}
-        )
-        return buf.getvalue()
-    finally:
-        plt.close(fig)
 
 
 def node_names(n_sinks: int, n_relays: int) -> list[str]:
@@ -150,29 +136,12 @@ def _margin_colorbar(fig, ax, margins: Sequence[float] | None) -> None:
     bar.ax.tick_params(labelsize=7)
 
 
-def _map_axes(
-    plan: MissionPlan, legend_rows: int, bounds: tuple[float, float, float, float] | None = None
-) -> tuple:
-    bm = plan.beach_map
-    x0, y0, x1, y1 = bounds or bm.bounds_m
-    w, h = figure_size(x1 - x0, y1 - y0, legend_rows)
-    fig, ax = new_figure(w, h, layout="constrained")
-    plot_map(bm, None, ax=ax)
-    legend = ax.get_legend()
-    handles = list(legend.legend_handles) if legend is not None else []
-    if legend is not None:
-        legend.remove()
-    ax.set_xlim(x0, x1)
-    ax.set_ylim(y0, y1)
-    return fig, ax, handles
-
-
 def plan_map_png(plan: MissionPlan, margins: Sequence[float] | None = None) -> bytes | None:
     """The map with routes by role (dotted: the sea leg), search tracks with their sensor swaths and
     the relay links coloured by margin (with a colour bar); None without the map."""
     if plan.beach_map is None:
         return None
-    fig, ax, handles = _map_axes(plan, 3)
+    fig, ax, handles = map_axes(plan.beach_map, 3)
     for sp in plan.search:
         tracks = [t for run in sp.tracks for t in run]
         band = swath(tracks, sp.sweep_width_m)
@@ -212,7 +181,7 @@ def plan_map_png(plan: MissionPlan, margins: Sequence[float] | None = None) -> b
     shown += ["relay links by margin"] if plan.relay is not None else []
     ax.set_title(f"{plan.mission} on {plan.beach_map.name}, seed {plan.seed}: {', '.join(shown)}", fontsize=9)
     fig.legend(handles=unique_handles(handles), loc="outside lower center", ncol=4, fontsize=7, frameon=False)
-    return _png(fig)
+    return png_bytes(fig)
 
 
 def _relay_bounds(plan: MissionPlan) -> tuple[float, float, float, float]:
@@ -228,7 +197,7 @@ def relay_png(plan: MissionPlan, margins: Sequence[float] | None = None) -> byte
     its margin in dB; None without a relay task or the map."""
     if plan.relay is None or plan.beach_map is None:
         return None
-    fig, ax, handles = _map_axes(plan, 2, _relay_bounds(plan))
+    fig, ax, handles = map_axes(plan.beach_map, 2, _relay_bounds(plan))
     handles = [h for h in handles if isinstance(h, Line2D)]  # regions, not the terrain fractions
     handles += _draw_relay(ax, plan, margins, labels=True)
     _margin_colorbar(fig, ax, margins)
@@ -239,7 +208,7 @@ def relay_png(plan: MissionPlan, margins: Sequence[float] | None = None) -> byte
         fontsize=9,
     )
     fig.legend(handles=unique_handles(handles), loc="outside lower center", ncol=4, fontsize=7, frameon=False)
-    return _png(fig)
+    return png_bytes(fig)
 
 
 def arrival_png(robots: Sequence[dict]) -> bytes | None:
@@ -303,4 +272,4 @@ def arrival_png(robots: Sequence[dict]) -> bytes | None:
         f"{(max(working) if working else end) / scale:.1f} {'min' if minutes else 's'}",
         fontsize=9,
     )
-    return _png(fig)
+    return png_bytes(fig)

@@ -9,16 +9,14 @@ Every function returns None when the mission has nothing to show (no losses, no 
 
 from __future__ import annotations
 
-import io
-
 import numpy as np
 from matplotlib.collections import LineCollection
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 from matplotlib.ticker import MaxNLocator
 
-from swarm.report.map_figure import figure_size, plot_map
-from swarm.report.style import OKABE_ITO, ROLE_COLOURS, new_figure, plt
+from swarm.report.map_figure import map_axes
+from swarm.report.style import OKABE_ITO, ROLE_COLOURS, as_words, new_figure, plt, png_bytes
 from swarm.sim.layout import PHASES, ROLES
 from swarm.sim.render import EXPLODED_FACE, MINE_COLOUR, NOT_LOST, cause_colour
 from swarm.sim.run import MissionLog
@@ -49,23 +47,6 @@ PHASE_COLOURS = {
     "lost": OKABE_ITO["vermillion"],
     "time_limit": "#888888",
 }
-PNG_DPI = 110
-
-
-def _png(fig) -> bytes:
-    """The figure as PNG bytes without a timestamp (same run, same bytes); closes it."""
-    try:
-        buf = io.BytesIO()
-        fig.savefig(
-            buf, format="png", dpi=PNG_DPI, bbox_inches="tight", pad_inches=0.08, metadata={"Software": None}
-        )
-        return buf.getvalue()
-    finally:
-        plt.close(fig)
-
-
-def _label(name: str) -> str:
-    return name.replace("_", " ")
 
 
 def robot_roles(log: MissionLog) -> list[str]:
@@ -87,20 +68,8 @@ def has_map(log: MissionLog) -> bool:
 def _map_figure(
     log: MissionLog, legend_rows: int = 2, bounds: tuple[float, float, float, float] | None = None
 ):
-    """A figure with the mission's map drawn in it, sized for `bounds` (default: the whole map);
-    returns (fig, ax, terrain and region legend handles)."""
-    bm = log.plan.beach_map
-    x0, y0, x1, y1 = bounds or bm.bounds_m
-    w, h = figure_size(x1 - x0, y1 - y0, legend_rows)
-    fig, ax = new_figure(w, h, layout="constrained")
-    plot_map(bm, None, ax=ax)
-    legend = ax.get_legend()
-    handles = list(legend.legend_handles) if legend is not None else []
-    if legend is not None:
-        legend.remove()
-    ax.set_xlim(x0, x1)
-    ax.set_ylim(y0, y1)
-    return fig, ax, handles
+    """A figure with the mission's map drawn in it (`map_axes`)."""
+    return map_axes(log.plan.beach_map, legend_rows, bounds)
 
 
 def _finish_map(fig, ax, handles: list, title: str) -> None:
@@ -129,7 +98,7 @@ def _loss_markers(ax, log: MissionLog, size: float = 60.0) -> list:
                 ms=7,
                 color=colour,
                 mec="white",
-                label=f"lost: {_label(cause)} ({len(pts)})",
+                label=f"lost: {as_words(cause)} ({len(pts)})",
             )
         )
     return handles
@@ -161,7 +130,7 @@ def trajectories_png(log: MissionLog) -> bytes | None:
         handles,
         f"{log.mission} on {log.map}, seed {log.seed}: executed paths by role over the plan (dashed)",
     )
-    return _png(fig)
+    return png_bytes(fig)
 
 
 def losses_map_png(log: MissionLog) -> bytes | None:
@@ -174,7 +143,7 @@ def losses_map_png(log: MissionLog) -> bytes | None:
     handles.append(Line2D([], [], color="#333333", lw=0.6, alpha=0.5, label="executed paths"))
     handles += _loss_markers(ax, log, size=80.0)
     _finish_map(fig, ax, handles, f"{len(log.losses)} robots lost: where, and why")
-    return _png(fig)
+    return png_bytes(fig)
 
 
 def losses_bar_png(log: MissionLog) -> bytes | None:
@@ -189,13 +158,13 @@ def losses_bar_png(log: MissionLog) -> bytes | None:
     for p in phases:
         counts = np.array([by_phase[p].get(c, 0) for c in causes], dtype=float)
         ax.bar(
-            [_label(c) for c in causes],
+            [as_words(c) for c in causes],
             counts,
             bottom=bottom,
             color=PHASE_COLOURS.get(p, "#777777"),
             edgecolor="white",
             lw=0.6,
-            label=_label(p),
+            label=as_words(p),
         )
         bottom += counts
     ax.set_ylabel("robots lost")
@@ -205,7 +174,7 @@ def losses_bar_png(log: MissionLog) -> bytes | None:
     ax.legend(title="phase when lost", fontsize=7, title_fontsize=7, loc="upper right")
     ax.set_title(f"losses by cause and phase ({len(log.losses)} of {len(log.robots)} robots)", fontsize=9)
     plt.setp(ax.get_xticklabels(), rotation=20, ha="right")
-    return _png(fig)
+    return png_bytes(fig)
 
 
 def _zoom(log: MissionLog) -> tuple[float, float, float, float]:
@@ -335,7 +304,7 @@ def mines_png(log: MissionLog) -> bytes | None:
             )
         )
     _finish_map(fig, ax, handles, "mines found and marked against the truth (search area)")
-    return _png(fig)
+    return png_bytes(fig)
 
 
 #: Relay events: the source reaching every sink (first time, again) and losing them.
@@ -406,7 +375,7 @@ def relay_png(log: MissionLog) -> bytes | None:
         bbox_to_anchor=(1.01, 1.0),
         frameon=False,
     )
-    return _png(fig)
+    return png_bytes(fig)
 
 
 def phase_counts(log: MissionLog) -> dict[str, np.ndarray]:
@@ -435,7 +404,7 @@ def phases_png(log: MissionLog) -> bytes | None:
         log.times_s / 60.0,
         *counts.values(),
         colors=[PHASE_COLOURS[s] for s in counts],
-        labels=[labels.get(s, _label(s)) for s in counts],
+        labels=[labels.get(s, as_words(s)) for s in counts],
     )
     ax.set_xlim(0, float(log.times_s[-1]) / 60.0 or 1.0)
     ax.set_ylim(0, len(log.robots))
@@ -444,4 +413,4 @@ def phases_png(log: MissionLog) -> bytes | None:
     ax.set_ylabel("robots")
     ax.set_title("robots by phase over time", fontsize=9)
     fig.legend(loc="outside right center", fontsize=7, frameon=False)
-    return _png(fig)
+    return png_bytes(fig)

@@ -10,7 +10,6 @@ each, so no figure relies on colour alone. Every function returns None when ther
 
 from __future__ import annotations
 
-import io
 import math
 from collections.abc import Sequence
 
@@ -22,15 +21,14 @@ from matplotlib.colors import ListedColormap
 from matplotlib.lines import Line2D
 from matplotlib.ticker import MaxNLocator
 
-from swarm.report.map_figure import figure_size, plot_map
+from swarm.report.map_figure import map_axes
 from swarm.report.sim_figures import CAUSE_MARKERS
-from swarm.report.style import OKABE_ITO, new_figure, plt
+from swarm.report.style import OKABE_ITO, as_words, new_figure, plt, png_bytes
 from swarm.sim.hazards import CAUSES
 from swarm.sim.layout import PHASES
 from swarm.sim.render import cause_colour
 from swarm.world.beachmap import BeachMap
 
-PNG_DPI = 110
 #: One style per series (a value of the second swept key): colour, marker, line style.
 SERIES_STYLES = [
     (OKABE_ITO["blue"], "o", "-"),
@@ -63,22 +61,6 @@ MAX_LOSS_MARKERS = 200
 HEAT_CMAP = ListedColormap(colormaps["inferno"](np.linspace(0.25, 0.95, 256)), name="losses")
 #: Small multiples of the completion-time figure per row.
 PANELS_PER_ROW = 4
-
-
-def _png(fig) -> bytes:
-    """The figure as PNG bytes without a timestamp (same study, same bytes); closes it."""
-    try:
-        buf = io.BytesIO()
-        fig.savefig(
-            buf, format="png", dpi=PNG_DPI, bbox_inches="tight", pad_inches=0.08, metadata={"Software": None}
-        )
-        return buf.getvalue()
-    finally:
-        plt.close(fig)
-
-
-def _label(name: str) -> str:
-    return name.replace("_", " ")
 
 
 def key_unit(key: str) -> str:
@@ -225,7 +207,7 @@ def success_png(summary: dict) -> bytes | None:
     per = f", {runs} runs per point" if runs else ""
     ax.set_title(f"success probability with {confidence:.0%} Wilson intervals{per}", fontsize=9)
     ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
-    return _png(fig)
+    return png_bytes(fig)
 
 
 def ordered_phases(names: Sequence[str]) -> list[str]:
@@ -285,13 +267,13 @@ def losses_png(summary: dict) -> bytes | None:
     for cause in causes:
         mean = np.array([by_phase.get(p, {}).get(cause, 0) / runs for p in phases])
         left.bar(
-            [_label(p) for p in phases],
+            [as_words(p) for p in phases],
             mean,
             bottom=bottom,
             color=colours[cause],
             edgecolor="white",
             lw=0.6,
-            label=_label(cause),
+            label=as_words(cause),
         )
         bottom += mean
         per_point = np.array([(p.get("losses_by_cause") or {}).get(cause, 0) / p["runs"] for p in points])
@@ -324,7 +306,7 @@ def losses_png(summary: dict) -> bytes | None:
     right.grid(axis="x", visible=False)
     fig.legend(title="cause", loc="outside right center", fontsize=7, title_fontsize=7, frameon=False)
     fig.suptitle("robots lost per run, by cause", fontsize=10)
-    return _png(fig)
+    return png_bytes(fig)
 
 
 def loss_points(table: pa.Table) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -361,13 +343,7 @@ def loss_map_png(table: pa.Table, beach_map: BeachMap | None) -> bytes | None:
     counts, _, _ = np.histogram2d(x, y, bins=[xedges, yedges])
     outside = len(x) - int(counts.sum())
 
-    fig_w, fig_h = figure_size(x1 - x0, y1 - y0, 3)
-    fig, ax = new_figure(fig_w + 1.0, fig_h, layout="constrained")
-    plot_map(beach_map, None, ax=ax)
-    legend = ax.get_legend()
-    handles = list(legend.legend_handles) if legend is not None else []
-    if legend is not None:
-        legend.remove()
+    fig, ax, handles = map_axes(beach_map, 3, extra_width_in=1.0)  # room for the colour bar
     mesh = ax.pcolormesh(
         xedges,
         yedges,
@@ -392,7 +368,14 @@ def loss_map_png(table: pa.Table, beach_map: BeachMap | None) -> bytes | None:
             )
             handles.append(
                 Line2D(
-                    [], [], ls="", marker=marker, ms=5, color=colour, mec="white", label=f"lost: {_label(c)}"
+                    [],
+                    [],
+                    ls="",
+                    marker=marker,
+                    ms=5,
+                    color=colour,
+                    mec="white",
+                    label=f"lost: {as_words(c)}",
                 )
             )
     ax.set_xlim(x0, x1)
@@ -401,7 +384,7 @@ def loss_map_png(table: pa.Table, beach_map: BeachMap | None) -> bytes | None:
     note = f"; {outside} outside the map" if outside else ""
     ax.set_title(f"where robots were lost: {len(x)} losses in {runs} runs{note}", fontsize=9)
     fig.legend(handles=handles, loc="outside lower center", ncol=5, fontsize=7, frameon=False)
-    return _png(fig)
+    return png_bytes(fig)
 
 
 def completion_times(table: pa.Table) -> dict[int, np.ndarray]:
@@ -437,7 +420,7 @@ def completion_png(table: pa.Table, summary: dict) -> bytes | None:
             va="center",
             fontsize=10,
         )
-        return _png(fig)
+        return png_bytes(fig)
     lo, hi = float(every.min()) / 60.0, float(every.max()) / 60.0
     if hi - lo < 1e-9:
         lo, hi = lo - 0.5, hi + 0.5
@@ -481,4 +464,4 @@ def completion_png(table: pa.Table, summary: dict) -> bytes | None:
         frameon=False,
     )
     fig.suptitle("time until every success criterion was met, completed runs only", fontsize=10)
-    return _png(fig)
+    return png_bytes(fig)

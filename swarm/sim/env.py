@@ -521,12 +521,7 @@ class SwarmEnv(ParallelEnv):
             isolated_s=np.zeros(n),
             radio_ok=self.radio_ok,
         )
-        losses = self.hazard_model.step(inp, self.rngs["hazards"])
-        self.radio_ok &= ~losses.radio_dropped
-        lost = losses.lost & self.alive
-        for i in np.flatnonzero(lost):
-            self._lose(int(i), hazards.CAUSES[losses.cause[i]])
-        self._pending_terminated |= lost
+        self._pending_terminated |= self._apply_hazards(inp)
         return k
 
     def _finish(self, terminated: np.ndarray, truncate: bool) -> None:
@@ -751,6 +746,10 @@ class SwarmEnv(ParallelEnv):
             isolated_s=self.isolated_s,
             radio_ok=self.radio_ok,
         )
+        return self._apply_hazards(inp)
+
+    def _apply_hazards(self, inp: hazards.HazardInputs) -> np.ndarray:
+        """Draw this step's (or stride's) losses and log them; returns who was lost."""
         losses = self.hazard_model.step(inp, self.rngs["hazards"])
         self.radio_ok &= ~losses.radio_dropped
         lost = losses.lost & self.alive

@@ -260,11 +260,16 @@ class MineSensor:
         hazard = self.sensor.width_m**2 / (8.0 * math.pi) * look
         hit = rng.random(len(r)) < -np.expm1(-hazard)
         robot, mine = robots[r[hit]], j[hit]
-        _, first = np.unique(mine, return_index=True)  # one report per mine: the lowest robot
+        return self._found(robot, mine, t_s)
+
+    def _found(self, robot: np.ndarray, mine: np.ndarray, t_s: float) -> list[Detection]:
+        """Mark the mines detected and report each once: by the first robot in the given order
+        (the lowest robot, or pass key)."""
+        _, first = np.unique(mine, return_index=True)
         first.sort()
         robot, mine = robot[first], mine[first]
-        field.detected[mine] = True
-        pos = field.positions_m
+        self.minefield.detected[mine] = True
+        pos = self.minefield.positions_m
         return [
             Detection(int(i), int(k), (float(pos[k, 0]), float(pos[k, 1])), t_s)
             for i, k in zip(robot, mine, strict=True)
@@ -361,18 +366,11 @@ class MineSensor:
             return []
         hit = rng.random(len(robot)) < self.curve(end_x)
         robot, mine = robot[hit], mine[hit]
-        _, first = np.unique(mine, return_index=True)  # one report per mine: the lowest key
-        first.sort()
-        robot, mine = robot[first], mine[first]
-        field.detected[mine] = True
+        found = self._found(robot, mine, t_s)
         if len(self._keys):  # nobody keeps passing a mine that is now known
             keep = ~field.detected[self._keys % m]
             self._keys, self._xmin = self._keys[keep], self._xmin[keep]
-        pos = field.positions_m
-        return [
-            Detection(int(i), int(k), (float(pos[k, 0]), float(pos[k, 1])), t_s)
-            for i, k in zip(robot, mine, strict=True)
-        ]
+        return found
 
     def _false_alarms(
         self,
