@@ -543,6 +543,17 @@ def _add_plan_command(commands) -> None:
         help="output folder (default: reports/<mission>-<YYYYmmdd-HHMMSS>/)",
     )
     plan.add_argument("--workers", type=int, help="planning processes (default: the CPU count)")
+    plan.add_argument(
+        "--evaluate",
+        type=int,
+        default=0,
+        metavar="N",
+        help="also simulate the plan N times (all cores) and add P(success), detection and losses to "
+        "the report; when the target is missed, a quick sweep suggests a swarm size (default: off)",
+    )
+    plan.add_argument(
+        "--target", type=float, default=0.9, help="P(success) the evaluation checks for (default 0.9)"
+    )
     plan.set_defaults(handler=_cmd_plan)
 
 
@@ -560,6 +571,10 @@ def _cmd_plan(args: argparse.Namespace) -> int:
         raise InputError("command line", "--seed", args.seed, "a seed >= 0")
     if args.workers is not None and args.workers < 1:
         raise InputError("command line", "--workers", args.workers, "at least 1")
+    if args.evaluate < 0:
+        raise InputError("command line", "--evaluate", args.evaluate, "a number of runs >= 0")
+    if not 0.0 < args.target < 1.0:
+        raise InputError("command line", "--target", args.target, "a probability strictly between 0 and 1")
     if not args.mission.is_file():
         raise InputError("command line", "MISSION.yaml", str(args.mission), "an existing mission YAML file")
     mission = load_mission(args.mission)
@@ -575,12 +590,46 @@ def _cmd_plan(args: argparse.Namespace) -> int:
 
         seed = mission.seed if args.seed is None else args.seed
         plan = plan_mission(mission, seed=seed, progress=progress, workers=args.workers)
-    paths = {**write_plan(plan, out), **write_plan_report(plan, out, date=today())}
+    paths = write_plan(plan, out)
+    evaluation = None
+    if args.evaluate:
+        from swarm.studies.evaluate import EVALUATION_FILE, evaluate_plan
+
+        with tqdm(desc="evaluating", unit="run", file=sys.stderr, leave=False) as bar:
+
+            def run_progress(done: int, total: int) -> None:
+                bar.total = total
+                bar.n = done
+                bar.refresh()
+
+            evaluation = evaluate_plan(
+                args.mission,
+                out,
+                runs=args.evaluate,
+                count=mission.swarm.count,
+                plan_seed=args.seed,
+                target=args.target,
+                workers=args.workers,
+                progress=run_progress,
+            )
+        paths[EVALUATION_FILE] = out / EVALUATION_FILE
+    paths.update(write_plan_report(plan, out, date=today(), evaluation=evaluation))
     print(f"plan for {plan.mission} on {plan.map}, seed {plan.seed}")
     rows = summary_rows(plan)
     width = max(len(k) for k, _ in rows)
     for key, value in rows:
         print(f"  {key.ljust(width)}  {value}")
+    if evaluation is not None:
+        print(
+            f"  {'in simulation'.ljust(width)}  P(success) {evaluation['success_rate']:.2f} over "
+            f"{evaluation['runs']} runs ({evaluation['wilson_low']:.2f} to {evaluation['wilson_high']:.2f}), "
+            f"target {evaluation['target']:g}"
+            + (
+                f"; suggested size {evaluation['suggested_count']}"
+                if evaluation.get("suggested_count")
+                else ""
+            )
+        )
     print(f"wrote {', '.join(p.name for p in paths.values())} in {out}")
     return 0
 
@@ -595,7 +644,13 @@ def _add_simulate_command(commands) -> None:
     sim.add_argument(
         "--seed",
         type=int,
-        help="random seed for the plan and the run (default: the mission's seed): same seed, same log",
+        help="random seed of the run: mines, waves, hazards, sensing (default: the mission's seed); "
+        "a study row's seed replays that run",
+    )
+    sim.add_argument(
+        "--plan-seed",
+        type=int,
+        help="random seed of the plan (default: the mission's seed, as swarm plan and swarm study plan it)",
     )
     sim.add_argument(
         "--out",
@@ -648,8 +703,9 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     from swarm.sim.render import Animator, check_animation_path
     from swarm.sim.run import simulate, write_log
 
-    if args.seed is not None and args.seed < 0:
-        raise InputError("command line", "--seed", args.seed, "a seed >= 0")
+    for option, value in (("--seed", args.seed), ("--plan-seed", args.plan_seed)):
+        if value is not None and not 0 <= value < 2**64:
+            raise InputError("command line", option, value, "a seed from 0 to 2**64 - 1")
     if args.workers is not None and args.workers < 1:
         raise InputError("command line", "--workers", args.workers, "at least 1")
     if args.animate is not None:
@@ -672,7 +728,8 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
             bar.n = done
             bar.refresh()
 
-        plan = plan_mission(mission, seed=seed, progress=plan_progress, workers=args.workers)
+        plan_seed = mission.seed if args.plan_seed is None else args.plan_seed
+        plan = plan_mission(mission, seed=plan_seed, progress=plan_progress, workers=args.workers)
 
     with tqdm(desc="simulating", unit="s", file=sys.stderr, leave=False) as bar:
 

@@ -38,22 +38,29 @@ from pathlib import Path
 
 import numpy as np
 import shapely
+import shapely.ops
 from scipy import ndimage
 from shapely.geometry import LineString
 
 from swarm.errors import SwarmError
 from swarm.files import write_text_atomic
+from swarm.mission import budget
 from swarm.mission.schema import Mission
-from swarm.planning import CostMap, PlanningError, build_costmap
+from swarm.planning import CostMap, PlanningError, build_costmap, detection
 from swarm.planning.allocation import assign
 from swarm.planning.batch import plan_many
-from swarm.planning.coverage import boustrophedon, detection_probability, split_tracks, swath_coverage
+from swarm.planning.coverage import boustrophedon, split_tracks, swath_coverage
+from swarm.planning.detection import clip_tracks, drivable_segments
 from swarm.planning.radio import RadioParams, comm_range_m, link_margin_db
 from swarm.planning.relay import plan_relays, standable_grid
 
 #: Entry cells up to this much farther from the launch point than the nearest one may be chosen
 #: to shorten the way to the goal, metres.
 ENTRY_SLACK_M = 10.0
+#: Search tracks keep this far from ground a robot cannot drive (m), beyond the footprint's own
+#: inflation, and pieces of track shorter than `MIN_TRACK_M` are left out.
+TRACK_MARGIN_M = 1.0
+MIN_TRACK_M = 2.0
 #: Decimal places of every float written to plan.json (1 mm; 1 ms).
 ROUND = 3
 ROLES = ("landing", "search", "relay", "surveillance", "beacon", "spare")
@@ -98,6 +105,8 @@ class SearchPlan:
     expected_detection: float
     swath_coverage: float
     area_m2: float
+    #: the search design (`swarm.mission.budget.SearchDesign`) and what it should give after losses
+    design: dict = field(default_factory=dict)
 
 
 @dataclass
@@ -150,6 +159,8 @@ class MissionPlan:
     source: dict = field(default_factory=dict)
     #: the mission's success criteria (`Success`), for the plan report's verdict
     criteria: dict = field(default_factory=dict)
+    #: expected losses by phase and cause, and what the plan should achieve after them
+    budget: dict = field(default_factory=dict)
 
     @property
     def expected_coverage(self) -> float | None:
@@ -225,6 +236,7 @@ class MissionPlan:
                     "model": s.model,
                     "expected_detection": s.expected_detection,
                     "swath_coverage": s.swath_coverage,
+                    "design": s.design,
                 }
                 for s in self.search
             ],
@@ -236,6 +248,8 @@ class MissionPlan:
             out["source"] = dict(self.source)
         if self.criteria:
             out["criteria"] = dict(self.criteria)
+        if self.budget:
+            out["budget"] = dict(self.budget)
         return _rounded(out)
 
 
@@ -364,7 +378,9 @@ def _track_points(tracks: list[LineString]) -> np.ndarray:
 # --- planning ---------------------------------------------------------------------------------------
 
 
-def _slots(mission: Mission, free: _Free) -> tuple[list[_Slot], list[SearchPlan], RelayPlanOut | None]:
+def _slots(
+    mission: Mission, free: _Free, launches: np.ndarray
+) -> tuple[list[_Slot], list[SearchPlan], RelayPlanOut | None]:
     bm = mission.beach_map
     count = mission.swarm.count
     slots: list[_Slot] = []
@@ -429,33 +445,155 @@ def _slots(mission: Mission, free: _Free) -> tuple[list[_Slot], list[SearchPlan]
         polygon = bm.regions[task.area].geometry
         if keep_out:
             polygon = polygon.difference(shapely.union_all(keep_out))
-        tracks = boustrophedon(polygon, task.spacing_m)
-        runs = split_tracks(tracks, n)
-        runs = [r for r in runs if r]
-        model = "random" if task.sensor.model == "random_search" else task.sensor.model
-        width = task.sensor.width_m
-        length = sum(tr.length for tr in tracks)
-        expected = detection_probability(
-            model, width, spacing_m=task.spacing_m, track_length_m=length, area_m2=polygon.area
-        )
-        search_out.append(
-            SearchPlan(
-                task=label,
-                area=task.area,
-                area_m=_outline(polygon),
-                sweep_width_m=width,
-                spacing_m=task.spacing_m,
-                model=task.sensor.model,
-                tracks=runs,
-                expected_detection=expected,
-                swath_coverage=swath_coverage(polygon, tracks, width),
-                area_m2=polygon.area,
-            )
-        )
-        for run in runs:
-            pts = _track_points(run)
-            slots.append(_Slot("search", label, free.snap(pts[0]), pts))
+        plan_out, search_slots = _plan_search(mission, task, label, polygon, n, free, launches)
+        search_out.append(plan_out)
+        slots.extend(search_slots)
     return slots, search_out, relay_out
+
+
+def _plan_search(
+    mission: Mission, task, label: str, polygon, n: int, free: _Free, launches: np.ndarray
+) -> tuple[SearchPlan, list[_Slot]]:
+    """Design one search for `n` robots (`swarm.mission.budget`), lay and split its tracks, and
+    work out what they should find: the searchers' slots (each the start of its run) and the
+    reserves' (spread over the area)."""
+    cm = free.cm
+    model = "random" if task.sensor.model == "random_search" else task.sensor.model
+    width = task.sensor.width_m
+    areas = budget.mine_areas(mission)
+    mine_area = shapely.union_all(areas) if areas else polygon
+    table = _lateral_range(task.sensor)
+    speed = budget.search_speed_mps(mission, cm, polygon)
+    start = _arrival_estimate_s(mission, launches, polygon)
+    rect = shapely.minimum_rotated_rectangle(polygon)
+    corners = np.asarray(rect.exterior.coords) if rect.geom_type == "Polygon" else np.zeros((2, 2))
+    row_m = float(np.hypot(*np.diff(corners, axis=0).T).max())
+    dense = drivable_segments(boustrophedon(polygon, budget.MIN_SPACING_FRACTION * width), cm)
+    reach = detection.expected_detection(mine_area, dense, model, width, table)
+    fractions = _class_fractions(cm, polygon)
+    approach = float(shapely.distance(shapely.Point(*launches.mean(axis=0)), polygon))
+
+    def typical_losses(spacing: float, searchers: int) -> dict:
+        run_m = polygon.area / spacing / max(searchers, 1) + approach
+        window = budget.search_window_s(mission, task, start)
+        sea_s, surf_s = _swim_times(mission, cm, launches, polygon)
+        exposure = budget.Exposure(
+            sea_s=sea_s,
+            surf_s=surf_s,
+            beach_s=max(window[1] - start, 0.0),
+            driven_m={c: f * run_m for c, f in fractions.items()},
+            in_mine_area_m=run_m - approach,
+        )
+        return budget.robot_losses(mission, cm, exposure)
+
+    design = budget.design_search(
+        mission,
+        task,
+        robots=n,
+        area_m2=polygon.area,
+        speed_mps=speed,
+        start_s=start,
+        loss_before_end=budget.lost_probability(typical_losses(width, n)),
+        reach=reach,
+        row_m=row_m,
+    )
+    # driving losses depend on the spacing: design once more with the spacing now known
+    design = budget.design_search(
+        mission,
+        task,
+        robots=n,
+        area_m2=polygon.area,
+        speed_mps=speed,
+        start_s=start,
+        loss_before_end=budget.lost_probability(typical_losses(design.spacing_m, design.searchers)),
+        reach=reach,
+        row_m=row_m,
+    )
+    spacing: float | None = design.spacing_m
+    while spacing is not None:
+        tracks = clip_tracks(boustrophedon(polygon, spacing), cm, TRACK_MARGIN_M, MIN_TRACK_M)
+        runs = [r for r in split_tracks(tracks, design.searchers) if r]
+        driven = [LineString(_track_points(r)) for r in runs if len(_track_points(r)) >= 2]
+        expected = detection.expected_detection(mine_area, drivable_segments(driven, cm), model, width, table)
+        design.spacing_m, spacing = spacing, design.tighten(model, width, spacing, expected)
+    spacing = design.spacing_m
+    run_s = design.run_time_s(polygon.area, spacing)
+    design_out = dataclasses.asdict(design)
+    design_out.update(
+        spacing_m=spacing,
+        search_time_s=run_s,
+        nominal_detection=budget.nominal_detection(model, width, spacing),
+        reachable_detection=reach,
+        p_criterion_met=budget.p_criterion_met(
+            mission.success.min_detection_fraction, design.mines_expected, expected
+        ),
+    )
+    out = SearchPlan(
+        task=label,
+        area=task.area,
+        area_m=_outline(polygon),
+        sweep_width_m=width,
+        spacing_m=spacing,
+        model=task.sensor.model,
+        tracks=runs,
+        expected_detection=expected,
+        swath_coverage=swath_coverage(polygon, tracks, width),
+        area_m2=polygon.area,
+        design=design_out,
+    )
+    slots = [_Slot("search", label, free.snap(_track_points(r)[0]), _track_points(r)) for r in runs]
+    if design.reserves:
+        centre = np.array(polygon.representative_point().coords[0])
+        slots.extend(_Slot("spare", label, p) for p in free.spread(polygon, design.reserves, centre))
+    return out, slots
+
+
+def _lateral_range(sensor):
+    """The sensor's tabulated lateral-range curve as p(d), or None (the model's own curve)."""
+    if sensor.lateral_range is None:
+        return None
+    r = np.asarray(sensor.lateral_range.range_m, dtype=np.float64)
+    p = np.asarray(sensor.lateral_range.probability, dtype=np.float64)
+    return lambda d: np.interp(np.abs(d), r, p, right=0.0)
+
+
+def _class_fractions(cm: CostMap, polygon) -> dict[str, float]:
+    """Share of the free ground of `polygon` on each terrain class."""
+    rows, cols = np.nonzero(~cm.blocked)
+    x, y = cm.center_of(rows, cols)
+    inside = shapely.contains_xy(polygon, x, y)
+    cls = cm.terrain[rows[inside], cols[inside]].astype(np.intp)
+    if not len(cls):
+        return {}
+    counts = np.bincount(cls, minlength=len(cm.terrain_classes)) / len(cls)
+    return {cm.terrain_classes[c]: float(v) for c, v in enumerate(counts) if v > 0}
+
+
+def _swim_times(mission: Mission, cm: CostMap, launches: np.ndarray, polygon) -> tuple[float, float]:
+    """A robot's time at sea and in the surf (on surf cells) on its way from a launch point toward
+    `polygon`, at swim speed, averaged over the launch points."""
+    swim = mission.robot.swim_speed_mps
+    mask = budget.surf_cells(mission)
+    sea, surf = [], []
+    for p in launches:
+        q = np.array(shapely.ops.nearest_points(polygon, shapely.Point(*p))[0].coords[0])
+        by_class, _ = budget.driven_by_class(cm, np.vstack([p, q]), None, mask)
+        surf_m = by_class[budget.SURF_ZONE]
+        water_m = sum(
+            v for c, v in by_class.items() if c != budget.SURF_ZONE and mission.terrain_library[c].is_water
+        )
+        sea.append((mission.launch.release_offshore_m + water_m - surf_m) / swim)
+        surf.append(max(surf_m / swim, budget.SURF_TRANSIT_S))
+    return float(np.mean(sea)), float(np.mean(surf))
+
+
+def _arrival_estimate_s(mission: Mission, launches: np.ndarray, polygon) -> float:
+    """When the last robot could be at the search area: its release, and the swim to the launch
+    point and on to the area's edge."""
+    last = (mission.swarm.count - 1) * mission.launch.interval_s
+    d = max(float(shapely.distance(shapely.Point(*p), polygon)) for p in launches)
+    swim = mission.robot.swim_speed_mps
+    return last + (mission.launch.release_offshore_m + d) / swim
 
 
 def _outline(polygon) -> list:
@@ -490,13 +628,12 @@ def plan_mission(
     free = _Free(cm, water)
     if not len(free.xy):
         raise SwarmError(f"plan: no ground on map '{bm.name}' a robot can drive on")
-    slots, searches, relay = _slots(mission, free)
-
     points = mission.launch.points
     if points is None:
         launches = [place_xy(bm, r.name) for r in bm.regions_of_kind("launch")]
     else:
         launches = [place_xy(bm, p) for p in points]
+    slots, searches, relay = _slots(mission, free, np.array(launches, dtype=np.float64))
     n = mission.swarm.count
     launch = np.array([launches[i % len(launches)] for i in range(n)])
 
@@ -566,9 +703,90 @@ def plan_mission(
         rp.length_m = offshore + float(np.hypot(*np.diff(wp, axis=0).T).sum()) if len(wp) > 1 else offshore
         robots.append(rp)
     name = mission.name or "mission"
-    return MissionPlan(
+    plan = MissionPlan(
         name, bm.name, seed, robots, searches, relay, cm, bm, _source(mission), mission.success.model_dump()
     )
+    plan.budget = _budget(mission, plan)
+    return plan
+
+
+def _budget(mission: Mission, plan: MissionPlan) -> dict:
+    """Expected losses by phase and cause over the planned routes, and each search's expected
+    detection once the routes into the area are counted too and after the losses
+    (`swarm.mission.budget`)."""
+    cm = plan.costmap
+    lib = mission.terrain_library
+    swim = mission.robot.swim_speed_mps
+    areas = budget.mine_areas(mission)
+
+    mine_area = shapely.union_all(areas) if areas else None
+    by_task = {s.task: s for s in plan.search}
+    surf = budget.surf_cells(mission)
+    per_phase: dict[str, dict[str, float]] = {p: {} for p in budget.PHASE_NAMES}
+    lost_by_task: dict[str, float] = {}
+    robot_s_by_task: dict[str, float] = {}
+    triggered = 0.0
+    for rp in plan.robots:
+        sea_by_class, _ = budget.driven_by_class(cm, rp.sea_leg_m, None, surf)
+        surf_s = max(sea_by_class[budget.SURF_ZONE] / swim, budget.SURF_TRANSIT_S)
+        arrive = rp.release_s + rp.sea_time_s
+        search = by_task.get(rp.task or "")
+        end = search.design["window_s"][1] if search is not None else mission.phases.beach_end_s
+        land = np.vstack([p.reshape(-1, 2) for p in (rp.ground_m, rp.track_m)])
+        driven, inside = budget.driven_by_class(cm, land, mine_area)
+        exposure = budget.Exposure(
+            sea_s=max(rp.sea_time_s - surf_s, 0.0),
+            surf_s=surf_s,
+            beach_s=max(end - arrive, 0.0),
+            driven_m={c: v for c, v in driven.items() if c != budget.SURF_ZONE and not lib[c].is_water},
+            in_mine_area_m=inside,
+        )
+        losses = budget.robot_losses(mission, cm, exposure)
+        for phase, causes in losses.items():
+            for cause, p in causes.items():
+                per_phase[phase][cause] = per_phase[phase].get(cause, 0.0) + p
+        triggered += losses["beach"].get("mine", 0.0)
+        if search is not None:
+            lost = budget.lost_probability(losses)
+            lost_by_task[search.task] = lost_by_task.get(search.task, 0.0) + lost
+            span = max(end - arrive, 0.0)
+            robot_s_by_task[search.task] = robot_s_by_task.get(search.task, 0.0) + span * (1.0 - lost / 2.0)
+    criterion = mission.success.min_detection_fraction
+    searches = {}
+    for s in plan.search:
+        team = [rp for rp in plan.robots if rp.task == s.task]
+        lines = [
+            LineString(w) for rp in team if len(w := np.vstack([rp.ground_m.reshape(-1, 2), rp.track_m])) >= 2
+        ]
+        task = next(t for t in mission.tasks_of("search") if t.area == s.area)
+        model = "random" if s.model == "random_search" else s.model
+        if lines and mine_area is not None:
+            s.expected_detection = detection.expected_detection(
+                mine_area, drivable_segments(lines, cm), model, s.sweep_width_m, _lateral_range(task.sensor)
+            )
+        need = s.design["searchers"] * s.design["search_time_s"]
+        capacity = robot_s_by_task.get(s.task, 0.0)
+        mines = s.design["mines_expected"]
+        after = s.expected_detection * min(1.0, capacity / need if need > 0 else 1.0)
+        if mines > 0:
+            after = max(0.0, after - triggered / mines)
+        s.design["p_criterion_met"] = budget.p_criterion_met(criterion, mines, s.expected_detection)
+        searches[s.task] = {
+            "criterion": criterion,
+            "expected_detection": s.expected_detection,
+            "expected_detection_after_losses": after,
+            "p_criterion_met": budget.p_criterion_met(criterion, mines, s.expected_detection),
+            "p_criterion_met_after_losses": budget.p_criterion_met(criterion, mines, after),
+            "expected_team_losses": lost_by_task.get(s.task, 0.0),
+            "reserves": s.design["reserves"],
+        }
+    total = sum(sum(c.values()) for c in per_phase.values())
+    return {
+        "hazards": budget.hazards_enabled(mission),
+        "expected_losses": {p: dict(sorted(c.items())) for p, c in per_phase.items()},
+        "expected_lost": total,
+        "search": searches,
+    }
 
 
 def _source(mission: Mission) -> dict:

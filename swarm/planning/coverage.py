@@ -11,7 +11,7 @@ track may run up to ``spacing_m / 2`` outside the polygon. Pieces are grouped in
 one back-and-forth sweep can cover (a cell ends where the polygon splits or merges across the
 sweep, Choset's critical points); tracks alternate direction within a cell and cells follow one
 another nearest first, so the list is one route. `split_tracks` cuts that route into contiguous
-runs of about equal length, one per searcher.
+runs of equal length, one per searcher, cutting through tracks where need be.
 
 Detection (Koopman, *Search and Screening*, 1946/1980; Washburn, *Search and Detection*, 4th ed.,
 2002, ch. 2). A sensor's lateral range curve p(x) is the chance of detecting a mine passed at
@@ -44,6 +44,7 @@ from scipy.special import erf
 from shapely import affinity
 from shapely.geometry import LineString, Polygon, box
 from shapely.geometry.base import BaseGeometry
+from shapely.ops import substring
 
 from swarm.errors import SwarmError
 
@@ -180,52 +181,55 @@ def track_length_m(tracks: list[LineString]) -> float:
     return float(sum(t.length for t in tracks))
 
 
-def split_tracks(tracks: list[LineString], n: int) -> list[list[LineString]]:
-    """Cut the ordered tracks into `n` contiguous runs of roughly equal track length.
+#: `split_tracks` never leaves a piece of track shorter than this at a cut (m): a cut that would
+#: falls back to the nearer end of the track.
+MIN_PIECE_M = 5.0
 
-    Minimizes the longest run (linear partition: bisection on the largest run length with a
-    greedy fill, exact to ~1e-12 relative), never leaves a run empty while tracks remain, and
-    keeps the driving order, so each searcher gets a strip of neighbouring tracks.
+
+def split_tracks(
+    tracks: list[LineString], n: int, min_piece_m: float = MIN_PIECE_M
+) -> list[list[LineString]]:
+    """Cut the ordered tracks into `n` contiguous runs of equal length to drive.
+
+    The route (the tracks in driving order, with the drive from each track's end to the next one's
+    start) is cut at every n-th of its length, through a track where need be, so each searcher
+    drives as far as the next and doubling the searchers halves the search time, however few
+    tracks there are. A cut within `min_piece_m` of a track's end, or in the drive between two
+    tracks, moves to a track's end (no slivers); runs that end up with no track come last, empty.
     """
     if n < 1:
         raise SwarmError(f"coverage: need at least one searcher, found {n}")
-    lengths = np.array([t.length for t in tracks], dtype=np.float64)
-    m = len(tracks)
-    if m == 0:
+    if not tracks:
         return [[] for _ in range(n)]
-
-    def cut(limit: float) -> list[int] | None:
-        """Start index of each run when runs may be `limit` long, or None if n runs are not enough."""
-        starts, load = [0], 0.0
-        for i, length in enumerate(lengths):
-            runs_left = n - len(starts)
-            must_cut = i > starts[-1] and m - i <= runs_left  # one track for each remaining run
-            if i > starts[-1] and (load + length > limit or must_cut):
-                if runs_left == 0:
-                    return None
-                starts.append(i)
-                load = 0.0
-            load += length
-        return starts
-
-    lo, hi = float(lengths.max()), float(lengths.sum())
-    if cut(lo) is None:
-        for _ in range(200):
-            mid = 0.5 * (lo + hi)
-            if cut(mid) is None:
-                lo = mid
+    lengths = np.array([t.length for t in tracks], dtype=np.float64)
+    # the drive from one track's end to the next one's start counts toward the run it leads into
+    joins = np.array([0.0, *(math.dist(a.coords[-1], b.coords[0]) for a, b in itertools.pairwise(tracks))])
+    starts = np.cumsum(joins + np.concatenate([[0.0], lengths[:-1]]))  # where each track starts
+    ends = starts + lengths
+    total = float(ends[-1])
+    cuts = [0.0]
+    for c in total * np.arange(1, n) / n:
+        j = int(np.clip(np.searchsorted(ends, c, side="left"), 0, len(tracks) - 1))
+        if c <= starts[j] or c - starts[j] < min_piece_m:
+            c = starts[j]  # in the drive to track j, or just into it: cut at its start
+        elif ends[j] - c < min_piece_m:
+            c = ends[j]
+        cuts.append(max(float(c), cuts[-1]))
+    cuts.append(total)
+    runs: list[list[LineString]] = []
+    for a, b in itertools.pairwise(cuts):
+        run = []
+        for j, t in enumerate(tracks):
+            lo, hi = max(a, starts[j]), min(b, ends[j])
+            if hi - lo <= 1e-9:
+                continue
+            if lo - starts[j] <= 1e-9 and ends[j] - hi <= 1e-9:
+                run.append(t)
             else:
-                hi = mid
-            if hi - lo <= 1e-12 * hi:
-                break
-        limit = hi
-    else:
-        limit = lo
-    starts = cut(limit)
-    assert starts is not None
-    bounds = [*starts, m]
-    runs = [list(tracks[a:b]) for a, b in itertools.pairwise(bounds)]
-    return runs + [[] for _ in range(n - len(runs))]
+                run.append(substring(t, lo - starts[j], hi - starts[j]))
+        runs.append(run)
+    full = [r for r in runs if r]
+    return full + [[] for _ in range(n - len(full))]
 
 
 def detection_probability(

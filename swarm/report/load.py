@@ -40,6 +40,7 @@ from swarm.report.sim_report import sim_report
 from swarm.report.study_report import study_report
 from swarm.report.validation_report import VALIDATION_FILE, read_validation, validation_report
 from swarm.sim.run import LOG_FILES, read_log
+from swarm.studies.evaluate import EVALUATION_FILE
 
 KINDS = ("plan", "simulation", "study", "validation")
 STUDY_FILES = ("summary.json", "results.parquet")
@@ -166,6 +167,7 @@ def plan_from_dict(d: dict, beach_map=None) -> MissionPlan:
                 expected_detection=float(s["expected_detection"]),
                 swath_coverage=float(s["swath_coverage"]),
                 area_m2=area,
+                design=dict(s.get("design", {})),
             )
         )
     relay = None
@@ -201,6 +203,7 @@ def plan_from_dict(d: dict, beach_map=None) -> MissionPlan:
         beach_map,
         dict(d.get("source") or {}),
         dict(d.get("criteria") or {}),
+        dict(d.get("budget") or {}),
     )
 
 
@@ -240,7 +243,11 @@ def report_for(path: str | Path, *, date: str | None = None) -> Report:
     kind, folder = detect(path)
     if kind == "plan":
         plan, d = read_plan(folder)
-        return _guard(folder / PLAN_FILE, lambda: plan_report(plan, date=date, plan_dict=d))
+        ev_path = folder / EVALUATION_FILE
+        evaluation = read_json(ev_path, EVALUATION_FILE) if ev_path.is_file() else None
+        return _guard(
+            folder / PLAN_FILE, lambda: plan_report(plan, date=date, plan_dict=d, evaluation=evaluation)
+        )
     if kind == "simulation":
         plan = read_plan(folder)[0] if (folder / PLAN_FILE).is_file() else None
         log = read_log(folder, plan=plan)

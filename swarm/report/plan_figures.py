@@ -273,3 +273,25 @@ def arrival_png(robots: Sequence[dict]) -> bytes | None:
         fontsize=9,
     )
     return png_bytes(fig)
+
+
+def evaluation_png(evaluation: dict, criterion: float | None, expected: list[float]) -> bytes:
+    """Histograms of the detected fraction and of the robots lost, over the plan's simulated runs."""
+    fig, (left, right) = new_figure(7.2, 2.8, ncols=2)
+    det = evaluation.get("detection_values") or []
+    if det:
+        left.hist(det, bins=min(20, max(5, len(det) // 3)), color=ROLE_COLOURS["search"], alpha=0.8)
+        if criterion is not None:
+            left.axvline(criterion, color="black", ls="--", lw=1.2, label=f"criterion {criterion:.0%}")
+        for e in expected:
+            left.axvline(e, color="black", lw=1.2, label=f"plan {e:.1%}")
+        left.legend(loc="upper left", fontsize=8)
+    left.set_xlabel("mines detected per run (fraction)")
+    left.set_ylabel("runs")
+    lost = evaluation.get("lost_values") or []
+    if lost:
+        top = max(lost)
+        right.hist(lost, bins=np.arange(-0.5, top + 1.5, 1.0), color=ROLE_COLOURS["spare"], alpha=0.8)
+    right.set_xlabel("robots lost per run")
+    right.set_ylabel("runs")
+    return png_bytes(fig)

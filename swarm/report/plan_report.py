@@ -55,20 +55,40 @@ def _robots(d: dict) -> list[dict]:
 
 
 def _search(d: dict) -> list[dict]:
-    return [
-        {
-            "task": s["task"],
-            "area": s.get("area"),
-            "searchers": len(s.get("tracks_m", [])),
-            "spacing_m": s["spacing_m"],
-            "sweep_width_m": s["sweep_width_m"],
-            "model": s["model"],
-            "expected_detection": s["expected_detection"],
-            "swath_coverage": s["swath_coverage"],
-            "track_length_m": round(sum(_length(t) for run in s.get("tracks_m", []) for t in run), 1),
-        }
-        for s in d.get("search", [])
-    ]
+    after = (d.get("budget") or {}).get("search", {})
+    out = []
+    for s in d.get("search", []):
+        design, b = s.get("design") or {}, after.get(s["task"], {})
+        out.append(
+            {
+                "task": s["task"],
+                "area": s.get("area"),
+                "searchers": len(s.get("tracks_m", [])),
+                "reserves": design.get("reserves", 0),
+                "spacing_m": s["spacing_m"],
+                "spacing_from": design.get("spacing_from", "mission"),
+                "sweep_width_m": s["sweep_width_m"],
+                "model": s["model"],
+                "expected_detection": s["expected_detection"],
+                "expected_detection_after_losses": b.get("expected_detection_after_losses"),
+                "p_criterion_met": b.get("p_criterion_met"),
+                "p_criterion_met_after_losses": b.get("p_criterion_met_after_losses"),
+                "search_time_s": design.get("search_time_s"),
+                "window_s": design.get("window_s"),
+                "note": design.get("note", ""),
+                "swath_coverage": s["swath_coverage"],
+                "track_length_m": round(sum(_length(t) for run in s.get("tracks_m", []) for t in run), 1),
+            }
+        )
+    return out
+
+
+def _losses(d: dict) -> dict | None:
+    """Expected losses by phase and cause (plan.json's budget), or None for an older plan."""
+    b = d.get("budget")
+    if not b:
+        return None
+    return {"hazards": b.get("hazards", True), "by_phase": b["expected_losses"], "total": b["expected_lost"]}
 
 
 def _relay(d: dict) -> dict | None:
@@ -108,13 +128,16 @@ def _checks(search: list[dict], relay: dict | None, criteria: dict) -> list[dict
     target = criteria.get("min_detection_fraction")
     if target is not None:
         for s in search:
+            after = s["expected_detection_after_losses"]
+            value = s["expected_detection"] if after is None else after
+            what = "expected detection" if after is None else "expected detection after losses"
             out.append(
                 {
-                    "criterion": f"expected detection ({s['task']})",
-                    "value": s["expected_detection"],
+                    "criterion": f"{what} ({s['task']})",
+                    "value": value,
                     "target": target,
                     "unit": "fraction",
-                    "met": s["expected_detection"] >= target - 1e-12,
+                    "met": value >= target - 1e-12,
                 }
             )
     if relay is not None and relay["min_margin_db"] is not None:
@@ -166,6 +189,7 @@ def plan_data(d: dict, date: str | None = None) -> dict:
             "expected_coverage": d.get("expected_coverage"),
         },
         "search": search,
+        "losses": _losses(d),
         "relay": relay,
         "robots": _robots(d),
         "source": d.get("source", {}),
@@ -201,13 +225,44 @@ def summary_table(data: dict) -> list[list[str]]:
         rows.append(
             [
                 f"search {sp['task']}",
-                f"{sp['searchers']} searchers, spacing {sp['spacing_m']:g} m, W {sp['sweep_width_m']:g} m, "
-                f"expected detection {sp['expected_detection']:.1%} ({sp['model']}), swath coverage "
-                f"{sp['swath_coverage']:.1%}",
+                f"{sp['searchers']} searchers and {sp['reserves']} reserves, spacing {sp['spacing_m']:g} m "
+                f"({'planned' if sp['spacing_from'] == 'planned' else 'from the mission'}), W "
+                f"{sp['sweep_width_m']:g} m, expected detection {sp['expected_detection']:.1%} "
+                f"({sp['model']}), swath coverage {sp['swath_coverage']:.1%}",
             ]
         )
+        if sp["expected_detection_after_losses"] is not None:
+            rows.append(
+                [
+                    f"after losses {sp['task']}",
+                    f"expected detection {sp['expected_detection_after_losses']:.1%}; P(criterion met) "
+                    f"{_num(sp['p_criterion_met'], '.2f')} as planned, "
+                    f"{_num(sp['p_criterion_met_after_losses'], '.2f')} after losses",
+                ]
+            )
+        if sp["note"]:
+            rows.append([f"note {sp['task']}", sp["note"]])
+    losses = data.get("losses")
+    if losses is not None:
+        phases = ", ".join(f"{p} {sum(c.values()):.1f}" for p, c in losses["by_phase"].items())
+        text = f"{losses['total']:.1f} robots ({phases})" if losses["hazards"] else "none: hazards off"
+        rows.append(["expected losses", text])
     if s["expected_coverage"] is not None:
         rows.append(["expected coverage", f"{s['expected_coverage']:.1%}"])
+    return rows
+
+
+def losses_table(data: dict) -> list[list[str]]:
+    """Expected robots lost, by cause (rows) and phase (columns)."""
+    by_phase = data["losses"]["by_phase"]
+    phases = list(by_phase)
+    causes = sorted({c for p in phases for c in by_phase[p]})
+    rows = [["cause", *phases, "total"]]
+    for c in causes:
+        vals = [by_phase[p].get(c, 0.0) for p in phases]
+        rows.append([c, *(f"{v:.2f}" for v in vals), f"{sum(vals):.2f}"])
+    totals = [sum(by_phase[p].values()) for p in phases]
+    rows.append(["total", *(f"{v:.2f}" for v in totals), f"{sum(totals):.2f}"])
     return rows
 
 
@@ -296,11 +351,58 @@ def summary_rows(plan: MissionPlan) -> list[list[str]]:
     return summary_table(plan_data(plan.as_dict()))
 
 
-def plan_report(plan: MissionPlan, *, date: str | None = None, plan_dict: dict | None = None) -> Report:
-    """The report of `plan`; `plan_dict` is its JSON (default: `plan.as_dict()`). The plan's
-    `beach_map` may be None (a map that cannot be found): the tables stay, the map figures go."""
+def evaluation_table(ev: dict) -> list[list[str]]:
+    """What the plan's simulations delivered (`swarm plan --evaluate`)."""
+    pct = f"{ev['confidence']:.0%}"
+    rows = [
+        ["runs", str(ev["runs"])],
+        [
+            "P(success)",
+            f"{ev['success_rate']:.3f} ({ev['successes']} of {ev['runs']}), {pct} Wilson interval "
+            f"{ev['wilson_low']:.3f} to {ev['wilson_high']:.3f}; target {ev['target']:g}",
+        ],
+    ]
+    det = ev.get("detection")
+    if det:
+        rows.append(
+            [
+                "detection per run",
+                f"mean {det['mean']:.1%}, median {det['median']:.1%}, {det['min']:.1%} to {det['max']:.1%}",
+            ]
+        )
+    lost = ev["lost"]
+    causes = ", ".join(f"{c} {n}" for c, n in ev["losses_by_cause"].items()) or "none"
+    rows.append(
+        ["robots lost per run", f"mean {lost['mean']:.1f}, {lost['min']:g} to {lost['max']:g} ({causes})"]
+    )
+    for size in ev.get("sizes", []):
+        rows.append(
+            [
+                f"quick sweep, {size['count']} robots",
+                f"P(success) {size['success_rate']:.3f} over {size['runs']} "
+                f"runs ({size['wilson_low']:.3f} to {size['wilson_high']:.3f})",
+            ]
+        )
+    if ev.get("sizes"):
+        suggested = ev.get("suggested_count")
+        rows.append(["suggested size", str(suggested) if suggested else "none of the quick sweep's sizes"])
+    return rows
+
+
+def plan_report(
+    plan: MissionPlan,
+    *,
+    date: str | None = None,
+    plan_dict: dict | None = None,
+    evaluation: dict | None = None,
+) -> Report:
+    """The report of `plan`; `plan_dict` is its JSON (default: `plan.as_dict()`); `evaluation`, the
+    plan simulated N times (`swarm.studies.evaluate`). The plan's `beach_map` may be None (a map
+    that cannot be found): the tables stay, the map figures go."""
     d = plan_dict if plan_dict is not None else plan.as_dict()
     data = plan_data(d, date)
+    if evaluation is not None:
+        data["evaluation"] = {k: v for k, v in evaluation.items() if not k.endswith("_values")}
     relay = data["relay"]
     margins = (
         None
@@ -311,6 +413,28 @@ def plan_report(plan: MissionPlan, *, date: str | None = None, plan_dict: dict |
     blocks: list = [Table("Plan summary", summary_table(data), header=False)]
     if data["verdict"].get("checks"):
         blocks.append(Table("Criteria a plan can check", check_table(data)))
+    if data.get("losses") is not None and data["losses"]["hazards"]:
+        title = "Expected losses (robots) by cause and phase, from the mission's hazards"
+        blocks.append(Table(title, losses_table(data)))
+    if evaluation is not None:
+        criterion = (d.get("criteria") or {}).get("min_detection_fraction")
+        blocks.append(
+            Table(
+                "The plan in simulation (swarm plan --evaluate)", evaluation_table(evaluation), header=False
+            )
+        )
+        blocks.append(
+            Figure(
+                "Detection and losses per simulated run",
+                lambda: figs.evaluation_png(
+                    evaluation, criterion, [s["expected_detection"] for s in data["search"]]
+                ),
+                alt="Histograms over the simulated runs of the fraction of mines detected, with the "
+                "criterion and the plan's expected detection, and of the robots lost per run",
+                caption="Left: mines detected per run, the success criterion (dashed) and the plan's "
+                "expected detection (solid). Right: robots lost per run.",
+            )
+        )
     shows = [
         (
             "routes by role",
@@ -387,6 +511,8 @@ def plan_report(plan: MissionPlan, *, date: str | None = None, plan_dict: dict |
     )
 
 
-def write_plan_report(plan: MissionPlan, out_dir: str | Path, *, date: str | None = None) -> dict[str, Path]:
+def write_plan_report(
+    plan: MissionPlan, out_dir: str | Path, *, date: str | None = None, evaluation: dict | None = None
+) -> dict[str, Path]:
     """Write report.html, report.md and report.json into `out_dir`; returns their paths."""
-    return plan_report(plan, date=date).write_all(out_dir)
+    return plan_report(plan, date=date, evaluation=evaluation).write_all(out_dir)

@@ -88,6 +88,9 @@ FOLLOW, GOTO, LOITER, MARK, RELAY, RETURN = range(len(COMMANDS))
 WAITING, SEA, SURF, BEACH, RETURNING, DONE = range(len(PHASES))
 #: A marking robot marks the object it loiters by within this distance (m).
 MARK_RADIUS_M = 1.0
+#: Robots keep this far from a mine that has been found and is not yet marked (m): four times the
+#: trigger radius (`swarm.sim.mines.DEFAULT_TRIGGER_RADIUS_M`), room for the track-following error.
+AVOID_MINE_M = 1.0
 #: Above this submersion a returning robot is afloat beyond the surf and picked up.
 PICKUP_SUBMERSION = 0.99
 #: The wheels find traction (terrain mode on) below this submersion.
@@ -572,6 +575,9 @@ class SwarmEnv(ParallelEnv):
         if command == MARK and target is not None and len(self.objects_m):
             d = np.hypot(*(self.objects_m - target).T)
             k = int(np.argmin(d))
+            if prev != MARK or self.marking[i] != k:
+                # around obstacles, not into them: a robot pushing on a log spins until it is stuck
+                self.routes.set(i, self.router.route(self.robot_state[i, :2], self.objects_m[k]))
             self.marking[i] = k
             self.target_m[i] = self.objects_m[k]
         elif command != MARK and self.marking[i] >= 0:
@@ -588,8 +594,12 @@ class SwarmEnv(ParallelEnv):
     def set_route(
         self, i: int, waypoints: np.ndarray, role: str | None = None, track_from: int | None = None
     ) -> None:
-        """Replace robot i's route (and role); it follows it under the `follow` command."""
+        """Replace robot i's route (and role); it follows it under the `follow` command, clear of the
+        objects found and not yet marked."""
         self.routes.set(i, waypoints, track_from)
+        known = self.objects_m[self.object_marker < 0]
+        if len(known):
+            self.routes.steer_clear(i, self.robot_state[i, :2], known, AVOID_MINE_M)
         if role is not None:
             self.role[i] = ROLES.index(role)
         self.command[i] = FOLLOW
@@ -599,7 +609,9 @@ class SwarmEnv(ParallelEnv):
         xy = self.robot_state[:, :2]
         route_targets = self.routes.targets(xy)
         follow = (self.command == FOLLOW) | (self.command == RETURN)
-        target = np.where(follow[:, None], route_targets, self.target_m)
+        # a marker follows its route to the mine, then closes in on the mine itself
+        routed = follow | ((self.command == MARK) & ~self.routes.done())
+        target = np.where(routed[:, None], route_targets, self.target_m)
         hold = (self.command == LOITER) | (self.command == RELAY)
         moving = self.alive & self.on_map & ~hold & ~(follow & self.routes.done())
         speed = self.limits.cruise_speed_mps
@@ -671,7 +683,10 @@ class SwarmEnv(ParallelEnv):
             alive=self.alive,
         )
         for det in found:
-            self.objects_m = np.vstack([self.objects_m, np.asarray(det.xy, dtype=np.float64)[None]])
+            xy = np.asarray(det.xy, dtype=np.float64)
+            for i in np.flatnonzero(self.alive & self.on_map & (self.marking < 0)):
+                self.routes.steer_clear(int(i), self.robot_state[i, :2], xy[None], AVOID_MINE_M)
+            self.objects_m = np.vstack([self.objects_m, xy[None]])
             self.object_mine = np.append(self.object_mine, det.mine)
             self.object_marker = np.append(self.object_marker, -1)
             kind = "detection" if det.mine >= 0 else "false_alarm"

@@ -95,7 +95,7 @@ from swarm.robot.params import GRAVITY_MPS2, RobotParams
 from swarm.robot.skid import HEADING, SkidModel, U, V, X, Y
 from swarm.robot.terrain import COEFFICIENTS, TerrainLibrary
 from swarm.world.beachmap import BeachMap
-from swarm.world.coastal import BREAKING_INDEX
+from swarm.world.coastal import BREAKING_INDEX, surf_zone_mask
 
 if TYPE_CHECKING:
     from swarm.mission.schema import Mission
@@ -237,7 +237,7 @@ class Physics:
 
         elevation = beach.elevation_m.astype(np.float64)
         depth = np.maximum(MIN_DEPTH_M, -elevation)
-        surf = is_water[beach.terrain] & (depth < sea.breaker_depth_m) & (elevation < sea.wave_height_m)
+        surf = surf_zone_mask(elevation, is_water[beach.terrain], sea.wave_height_m, MIN_DEPTH_M)
         if "surf" in beach.terrain_classes:
             surf |= beach.terrain == beach.class_index("surf")
         self.surf_mask: np.ndarray = surf

@@ -4,36 +4,54 @@ work to the survivors that can hear about it.
 It drives the environment in command mode. Each step it:
 
 1. Reads the new events. A lost robot's work becomes an open *work item*: the rest of its search
-   track, its station (landing, relay, surveillance or beacon point; relays are how the chain heals),
-   or the mine it was marking. A robot that found a mine makes a *mark* item.
+   track (in pieces of `TAKEOVER_PIECE_M`), its station (landing, relay, surveillance or beacon
+   point; relays are how the chain heals), or the mine it was marking. A robot that found a mine
+   makes a *mark* item.
 2. Spreads the news over the radio: an item is known first to the robots in the lost (or finding)
    robot's radio component at the time, then to every component that contains a robot that knows
    it, as links come and go. Jammed or isolated robots learn nothing.
 3. Every `realloc_period_s`, assigns open items to idle robots that know of them (spares, and
    searchers whose track is done) with the forward auction of `swarm.planning.allocation`, cost the
-   straight-line distance to the item; the winner gets a route there (`swarm.sim.router`).
-   A mine found with no idle robot within `MARK_HELP_M` is marked by its finder, whose remaining
-   track becomes an item.
-4. Before the synchronized clearance (`clearance_lead_s` ahead), robots inside a marked mine's
-   standoff (plus a margin) move out and everyone else holds until the detonation, then resumes.
+   straight-line distance to the item; the winner gets a route there (`swarm.sim.router`). Routes
+   (a lost searcher's track, a lost station) go first; marks wait until they are due (nobody is
+   searching any more, or the clearance is near enough that the nearest free robot must set off).
+   A searcher that finds a mine reports it and keeps searching: marking never consumes a
+   searcher's track (the plan's detection counts on every track being driven). The mark goes to
+   a reserve, or to a searcher once its track is done.
+4. Before the synchronized clearance (`clearance_lead_s` ahead, or longer when the standoff is
+   far to drive), robots within a marked mine's standoff (plus a margin) move to the nearest free
+   point clear of every marked mine's standoff, a robot still on its way to mark a mine turns back
+   when it cannot get there in time, and everyone else holds until the detonation, then resumes.
 5. At the end of beach operations (with the return to sea enabled), and for any robot whose battery
    falls to the reserve, the command is "return to sea".
 """
 
 from __future__ import annotations
 
+import itertools
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from swarm.planning.allocation import auction
 from swarm.sim.env import FOLLOW, LOITER, MARK, RETURN, RETURNING, SEA, SwarmEnv
 from swarm.sim.layout import ROLES
 
-#: A mine's finder asks an idle robot within this distance to mark it, else marks it itself (m).
-MARK_HELP_M = 60.0
 #: Extra distance beyond the clearance standoff that robots retreat to (m).
 STANDOFF_MARGIN_M = 10.0
+#: Retreat time allowed per metre of standoff, as a multiple of the straight-line time at cruise
+#: speed (pivots, detours), plus a fixed allowance (s): sets the clearance lead when the standoff
+#: is too far to clear in `clearance_lead_s`.
+RETREAT_TIME_FACTOR = 1.5
+RETREAT_ALLOWANCE_S = 30.0
+#: A lost searcher's remaining track is offered in pieces of at most this length (m), so several
+#: idle robots can share it instead of one driving it all.
+TAKEOVER_PIECE_M = 300.0
+#: A mark is handed out this long before the robot that takes it must set off to make the
+#: clearance, so a search still running can use the robot meanwhile (s).
+MARK_SLACK_S = 600.0
 SPARE, SEARCH, RELAY_ROLE = ROLES.index("spare"), ROLES.index("search"), ROLES.index("relay")
 STATIONS = tuple(ROLES.index(r) for r in ("landing", "relay", "surveillance", "beacon"))
 
@@ -51,6 +69,24 @@ class WorkItem:
     audience: np.ndarray = field(default_factory=lambda: np.zeros(0, bool))
     created_s: float = 0.0
     taken_by: int = -1
+
+
+def split_polyline(points: np.ndarray, piece_m: float) -> list[np.ndarray]:
+    """`points` cut into consecutive polylines of at most `piece_m` each (cut at interpolated points,
+    so the pieces join end to start and together are the whole line)."""
+    pts = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+    if len(pts) < 2:
+        return [pts] if len(pts) else []
+    cum = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(pts, axis=0).T))])
+    total = float(cum[-1])
+    k = max(1, math.ceil(total / piece_m - 1e-9))
+    cuts = np.linspace(0.0, total, k + 1)
+    out = []
+    for a, b in itertools.pairwise(cuts):
+        inner = (cum > a) & (cum < b)
+        ends = np.array([[np.interp(v, cum, pts[:, 0]), np.interp(v, cum, pts[:, 1])] for v in (a, b)])
+        out.append(np.vstack([ends[:1], pts[inner], ends[1:]]))
+    return out
 
 
 class ScriptedPolicy:
@@ -97,7 +133,7 @@ class ScriptedPolicy:
         self._battery()
         self._clearance()
         self._return()
-        if env.t_s + 1e-9 >= self._next_alloc_s:
+        if env.t_s + 1e-9 >= self._next_alloc_s and self._clearance_state != "holding":
             self._next_alloc_s = env.t_s + self.realloc_period_s
             self._allocate()
 
@@ -148,32 +184,32 @@ class ScriptedPolicy:
             self.items.append(WorkItem("route", ROLES[role], goal.copy(), goal[None].copy(),
                                        audience=audience, created_s=t))  # fmt: skip
         elif role == SEARCH:
-            rest = env.routes.remaining_track(i)
-            if len(rest):
-                self.items.append(WorkItem("route", "search", rest[0].copy(), rest, track=True,
+            for piece in split_polyline(env.routes.remaining_track(i), TAKEOVER_PIECE_M):
+                self.items.append(WorkItem("route", "search", piece[0].copy(), piece, track=True,
                                            audience=audience, created_s=t))  # fmt: skip
 
     def _on_loss(self, i: int) -> None:
-        self._release_work(i, self._hearers(i))
+        """Ashore, a loss is known to the robot's radio component. A robot lost before it reached
+        the beach is known to everyone: the launch platform tracks its robots on the way in (they
+        surface for fixes) and tells the swarm at its first contact, so its whole task is reopened."""
+        env = self.env
+        if env.on_map[i]:
+            self._release_work(i, self._hearers(i))
+        else:
+            self._release_work(i, env.alive.copy())
 
     def _on_find(self, finder: int, k: int) -> None:
+        """A find becomes a mark item, known to the finder's radio component; the finder searches on."""
         env = self.env
         search = env.search_task
         if search is None or not search.mark or not env.alive[finder]:
             return
-        hear = self._hearers(finder)
-        idle = self._idle() & hear
-        obj = env.objects_m[k]
-        if idle.any():
-            cand = np.flatnonzero(idle)
-            d = np.hypot(*(env.robot_state[cand, :2] - obj).T)
-            if d.min() <= MARK_HELP_M:
-                j = int(cand[int(np.argmin(d))])
-                env.set_command(j, MARK, obj)
-                return
-        # the finder marks it; the rest of its track goes to whoever can take it
-        self._release_work(finder, hear)
-        env.set_command(finder, MARK, obj)
+        if any(it.kind == "mark" and it.obj == k for it in self.items):
+            return
+        audience = self._hearers(finder)
+        audience[finder] = True
+        self.items.append(WorkItem("mark", ROLES[env.role[finder]], env.objects_m[k].copy(), obj=k,
+                                   audience=audience, created_s=env.t_s))  # fmt: skip
 
     def _spread(self) -> None:
         env = self.env
@@ -204,14 +240,44 @@ class ScriptedPolicy:
         )
 
     def _allocate(self) -> None:
+        """Hand open items to idle robots that know of them: routes (a lost robot's track or station)
+        first, then marks, and marks only when they are due (`_marks_due`): a robot loitering on a
+        mine early can neither finish a lost searcher's track nor dodge the hazards while it waits."""
         env = self.env
-        open_items = [it for it in self.items if it.taken_by < 0 and it.kind in ("route", "mark")]
-        open_items = [it for it in open_items if not (it.kind == "mark" and env.object_marker[it.obj] >= 0)]
-        if not open_items:
-            return
         idle = self._idle()
-        if not idle.any():
-            return
+        routes = [it for it in self.items if it.taken_by < 0 and it.kind == "route"]
+        if routes and idle.any():
+            self._auction(routes, idle)
+            idle = self._idle()
+        marks = [it for it in self.items if it.taken_by < 0 and it.kind == "mark"]
+        marks = [it for it in marks if env.object_marker[it.obj] < 0]
+        if marks and idle.any():
+            still_open = [it for it in self.items if it.taken_by < 0 and it.kind == "route"]
+            knows_route = np.zeros(env.n, bool)
+            for it in still_open:
+                knows_route |= it.audience
+            free = idle & ~knows_route
+            due = [it for it in marks if self._mark_due(it, free)]
+            if due and free.any():
+                self._auction(due, free)
+
+    def _mark_due(self, it: WorkItem, free: np.ndarray) -> bool:
+        """A mark is due once nobody is searching any more, or when the nearest robot free to take it
+        must set off to be on the mine before the clearance (with the retreat factor's slack and
+        `MARK_SLACK_S` to spare); with no clearance, at once."""
+        env = self.env
+        c = env.clearance
+        if c is None or not (env.routes.in_track() & env.alive).any():
+            return True
+        cand = np.flatnonzero(free & it.audience)
+        if not len(cand):
+            return False
+        gap = float(np.min(np.hypot(*(env.robot_state[cand, :2] - it.start_m).T)))
+        travel = RETREAT_TIME_FACTOR * gap / env.limits.cruise_speed_mps
+        return env.t_s + travel + MARK_SLACK_S >= c.at_s - self.lead_s()
+
+    def _auction(self, open_items: list[WorkItem], idle: np.ndarray) -> None:
+        env = self.env
         xy = env.robot_state[:, :2]
         starts = np.array([it.start_m for it in open_items])
         cost = np.hypot(xy[:, None, 0] - starts[None, :, 0], xy[:, None, 1] - starts[None, :, 1])
@@ -251,30 +317,22 @@ class ScriptedPolicy:
             env.set_command(int(i), RETURN)
             env._event("battery_reserve", int(i))
 
+    def lead_s(self) -> float:
+        """How long before the detonation robots start clearing the standoff."""
+        c = self.env.clearance
+        if c is None:
+            return self.clearance_lead_s
+        drive_s = (c.standoff_m + STANDOFF_MARGIN_M) / self.env.limits.cruise_speed_mps
+        return max(self.clearance_lead_s, RETREAT_TIME_FACTOR * drive_s + RETREAT_ALLOWANCE_S)
+
     def _clearance(self) -> None:
         env = self.env
         c = env.clearance
         if c is None or self._clearance_state == "done":
             return
-        if self._clearance_state == "before" and env.t_s + 1e-9 >= c.at_s - self.clearance_lead_s:
+        if self._clearance_state == "before" and env.t_s + 1e-9 >= c.at_s - self.lead_s():
             self._clearance_state = "holding"
-            marked = env.object_marker >= 0
-            objs = env.objects_m[marked]
-            for i in np.flatnonzero(env.alive & env.on_map & (env.marking < 0)):
-                xy = env.robot_state[i, :2]
-                rest = env.routes.remaining(i)
-                in_track = bool(env.routes.in_track()[i])
-                self._held[int(i)] = (rest, in_track)
-                if len(objs):
-                    d = np.hypot(*(objs - xy).T)
-                    j = int(np.argmin(d))
-                    if d[j] < c.standoff_m + STANDOFF_MARGIN_M:
-                        away = xy - objs[j]
-                        norm = float(np.hypot(*away)) or 1.0
-                        goal = objs[j] + away / norm * (c.standoff_m + STANDOFF_MARGIN_M)
-                        env.set_route(int(i), env.router.route(xy, goal))
-                        continue
-                env.set_command(int(i), LOITER)
+            self._hold(c.at_s - env.t_s, c.standoff_m + STANDOFF_MARGIN_M)
         elif self._clearance_state == "holding" and env.cleared:
             self._clearance_state = "done"
             for i, (rest, in_track) in self._held.items():
@@ -288,6 +346,47 @@ class ScriptedPolicy:
                 else:
                     env.set_route(i, env.robot_state[i, :2][None])
             self._held.clear()
+
+    def _hold(self, time_left_s: float, safe_m: float) -> None:
+        """Everyone but the markers stops; those within `safe_m` of a marked mine move clear first.
+
+        A robot on its way to mark a mine keeps going if it can get there in `time_left_s` at
+        cruise speed (with the retreat factor's slack), else it gives the mark up and retreats."""
+        env = self.env
+        marked = env.object_marker >= 0
+        speed = env.limits.cruise_speed_mps
+        for i in np.flatnonzero(env.alive & env.on_map & (env.marking >= 0)):
+            k = int(env.marking[i])
+            if env.object_marker[k] == i:
+                continue  # on its mine: it goes with it
+            gap = float(np.hypot(*(env.robot_state[i, :2] - env.objects_m[k])))
+            if RETREAT_TIME_FACTOR * gap / speed + RETREAT_ALLOWANCE_S < time_left_s:
+                marked[k] = True  # it will be there: keep clear of that mine too
+                continue
+            for it in self.items:
+                if it.kind == "mark" and it.obj == k and it.taken_by == i:
+                    it.taken_by = -1
+            env.set_command(int(i), LOITER)  # drops the mark
+        objs = env.objects_m[marked]
+        safe = self._safe_points(objs, safe_m) if len(objs) else None
+        for i in np.flatnonzero(env.alive & env.on_map & (env.marking < 0)):
+            xy = env.robot_state[i, :2]
+            self._held[int(i)] = (env.routes.remaining(i), bool(env.routes.in_track()[i]))
+            if safe is not None and float(np.min(np.hypot(*(objs - xy).T))) < safe_m:
+                tree, pts = safe
+                goal = pts[int(tree.query(xy)[1])]
+                env.set_route(int(i), env.router.route(xy, goal))
+                continue
+            env.set_command(int(i), LOITER)
+
+    def _safe_points(self, objs: np.ndarray, safe_m: float) -> tuple[cKDTree, np.ndarray]:
+        """Centres of free cells at least `safe_m` from every point of `objs`, in a KD-tree."""
+        cm = self.env.plan.costmap
+        rows, cols = np.nonzero(~cm.blocked)
+        pts = np.column_stack(cm.center_of(rows, cols))
+        far = cKDTree(objs).query(pts)[0] >= safe_m
+        pts = pts[far] if far.any() else pts
+        return cKDTree(pts), pts
 
     def _return(self) -> None:
         env = self.env

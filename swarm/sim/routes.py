@@ -8,12 +8,22 @@ old ones stay (routes are small next to the trajectories).
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 
 #: A waypoint counts as reached within this distance (m); the last one of a route, where the
 #: robot stops, within `FINAL_CAPTURE_M` (inside the controller's stopping distance).
 CAPTURE_M = 1.0
 FINAL_CAPTURE_M = 0.3
+#: Pure pursuit: the robot steers for the point this far ahead of its projection on the leg it is
+#: driving (m). Steering for the far end of a 900 m search track instead lets a cross-slope push
+#: carry the robot metres off the track it was planned to sweep; chasing a point on the leg pulls
+#: it back. Long enough that the controller does not slow for it (its slowdown starts at 1 m).
+LOOKAHEAD_M = 1.5
+#: A leg's end counts as passed once the robot is beyond it along the leg and within this distance
+#: of the leg's line (m), so a robot pushed wide of a corner does not circle back for it.
+PASS_CROSS_TRACK_M = 2.0
 
 
 class Routes:
@@ -33,6 +43,21 @@ class Routes:
         self.points = np.vstack([self.points, pts])
         self.start[i], self.end[i], self.cursor[i] = base, base + len(pts), base
         self.sensing_from[i] = base + (len(pts) if sensing_from is None else sensing_from)
+
+    def steer_clear(self, i: int, xy: np.ndarray, avoid: np.ndarray, radius_m: float) -> None:
+        """Re-lay what is left of robot i's route (from where it stands) clear of `avoid` (`clear_of`),
+        keeping the part that is search track marked as such."""
+        if self.cursor[i] >= self.end[i] or not len(avoid):
+            return
+        rest = self.points[self.cursor[i] : self.end[i]]
+        new, where = clear_of(np.vstack([xy[None], rest]), avoid, radius_m)
+        if len(new) == len(rest) + 1:
+            return  # nothing in the way
+        track = int(self.sensing_from[i]) - int(self.cursor[i])  # where the track starts in `rest`
+        if track >= len(rest):
+            self.set(i, new[1:])
+        else:
+            self.set(i, new[1:], sensing_from=0 if track <= 0 else int(where[track + 1]) - 1)
 
     def clear(self, i: int) -> None:
         self.start[i] = self.end[i] = self.cursor[i] = self.sensing_from[i] = len(self.points)
@@ -63,20 +88,74 @@ class Routes:
                 return
             idx = np.flatnonzero(live)
             wp = self.points[self.cursor[idx]]
-            radius = np.where(self.cursor[idx] == self.end[idx] - 1, FINAL_CAPTURE_M, CAPTURE_M)
+            final = self.cursor[idx] == self.end[idx] - 1
+            radius = np.where(final, FINAL_CAPTURE_M, CAPTURE_M)
             hit = np.hypot(*(wp - xy[idx]).T) < radius
+            along, cross, length = self._leg_coordinates(idx, xy[idx])
+            hit |= ~final & (length > 0) & (along >= length) & (np.abs(cross) <= PASS_CROSS_TRACK_M)
             if not hit.any():
                 return
             self.cursor[idx[hit]] += 1
 
+    def _leg_coordinates(self, idx: np.ndarray, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Each robot's position along and across the leg it is on (from the waypoint before its
+        cursor to the cursor's), and the leg's length; length 0 on a route's first waypoint."""
+        cur = self.points[self.cursor[idx]]
+        has_prev = self.cursor[idx] > self.start[idx]
+        prev = np.where(has_prev[:, None], self.points[np.maximum(self.cursor[idx] - 1, 0)], cur)
+        leg = cur - prev
+        length = np.hypot(leg[:, 0], leg[:, 1])
+        unit = leg / np.maximum(length, 1e-12)[:, None]
+        rel = xy - prev
+        along = rel[:, 0] * unit[:, 0] + rel[:, 1] * unit[:, 1]
+        cross = unit[:, 0] * rel[:, 1] - unit[:, 1] * rel[:, 0]
+        return along, cross, length
+
     def targets(self, xy: np.ndarray) -> np.ndarray:
-        """(n, 2) each robot's current waypoint (its own position when its route is done)."""
+        """(n, 2) where each robot steers: `LOOKAHEAD_M` ahead of its projection on its current leg,
+        capped at the leg's end (the waypoint itself on a route's first point; its own position
+        when its route is done)."""
         out = xy.copy()
-        live = self.cursor < self.end
-        out[live] = self.points[self.cursor[live]]
+        idx = np.flatnonzero(self.cursor < self.end)
+        if not len(idx):
+            return out
+        cur = self.points[self.cursor[idx]]
+        along, _, length = self._leg_coordinates(idx, xy[idx])
+        ahead = np.clip(along, 0.0, length) + LOOKAHEAD_M
+        on_leg = (length > 0) & (ahead < length)
+        prev = self.points[np.maximum(self.cursor[idx] - 1, 0)]
+        frac = np.where(on_leg, ahead / np.maximum(length, 1e-12), 1.0)
+        out[idx] = np.where(on_leg[:, None], prev + (cur - prev) * frac[:, None], cur)
         return out
 
     def progress(self) -> np.ndarray:
         """(n,) fraction of each route's waypoints passed (1 without a route)."""
         length = self.end - self.start
         return np.where(length > 0, (self.cursor - self.start) / np.maximum(length, 1), 1.0)
+
+
+def clear_of(points: np.ndarray, avoid: np.ndarray, radius_m: float) -> tuple[np.ndarray, np.ndarray]:
+    """`points` (a polyline) with a side-step around every point of `avoid` that a leg passes within
+    `radius_m` of: two waypoints abreast of it, `radius_m` out on the leg's far side from it. Returns
+    the new polyline and, for each original point, its index in it."""
+    pts = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+    avoid = np.asarray(avoid, dtype=np.float64).reshape(-1, 2)
+    if len(pts) < 2 or not len(avoid):
+        return pts.copy(), np.arange(len(pts))
+    out, where = [pts[:1]], [0]
+    for a, b in itertools.pairwise(pts):
+        leg = b - a
+        length = float(np.hypot(*leg))
+        if length > 1e-9:
+            u = leg / length
+            n = np.array([-u[1], u[0]])
+            rel = avoid - a
+            along, across = rel @ u, rel @ n
+            near = (np.abs(across) < radius_m) & (along > -radius_m) & (along < length + radius_m)
+            for j in np.flatnonzero(near)[np.argsort(along[near])]:
+                side = across[j] - (radius_m if across[j] >= 0 else -radius_m)
+                s0, s1 = np.clip([along[j] - radius_m, along[j] + radius_m], 0.0, length)
+                out.append(np.array([a + u * s0 + n * side, a + u * s1 + n * side]))
+        out.append(b[None])
+        where.append(sum(len(o) for o in out) - 1)
+    return np.vstack(out), np.array(where)

@@ -65,12 +65,13 @@ from shapely.geometry.base import BaseGeometry
 
 from swarm.mission import schema
 from swarm.planning.coverage import inverse_cube_lateral_range
+from swarm.planning.detection import (
+    inverse_cube_look,
+    inverse_cube_range_m,
+    segment_distance,
+)
 from swarm.sim.mines import MineField
 
-#: The inverse-cube curve is cut where p(x) falls below this.
-INVERSE_CUBE_FLOOR = 1e-3
-#: Lateral distances below this count as this (m): the inverse-cube rate is singular on the track.
-MIN_LATERAL_M = 0.05
 #: The screen for robots near a mine allows this much movement within a step (m).
 SCREEN_MARGIN_M = 5.0
 _NEIGHBOUR_BINS = np.array([(i, j) for i in (-1, 0, 1) for j in (-1, 0, 1)], dtype=np.int64)
@@ -128,36 +129,8 @@ def max_range_m(sensor: schema.Sensor) -> float:
         return float(r[min(last + 1, len(r) - 1)])
     w = sensor.width_m
     if sensor.model == "inverse_cube":
-        return w / math.sqrt(-4.0 * math.pi * math.log1p(-INVERSE_CUBE_FLOOR))
+        return inverse_cube_range_m(w)
     return w / 2.0
-
-
-def _segment_distance(a: np.ndarray, b: np.ndarray, m: np.ndarray) -> np.ndarray:
-    """Distance from each point m to the segment a-b (rows)."""
-    v = b - a
-    w = m - a
-    vv = np.einsum("ij,ij->i", v, v)
-    t = np.einsum("ij,ij->i", w, v) / np.where(vv > 0, vv, 1.0)
-    t = np.clip(t, 0.0, 1.0)
-    e = w - t[:, None] * v
-    return np.sqrt(np.einsum("ij,ij->i", e, e))
-
-
-def _inverse_cube_look(a: np.ndarray, b: np.ndarray, m: np.ndarray) -> np.ndarray:
-    """Integral of ds / r^3 along each segment a-b (rows) for the point m: with x the distance from
-    m to the segment's line and s the coordinate along it, [s / (x^2 sqrt(x^2 + s^2))] between the
-    ends. A whole straight pass gives 2 / x^2."""
-    v = b - a
-    length = np.sqrt(np.einsum("ij,ij->i", v, v))
-    moving = length > 1e-12
-    u = v / np.where(moving, length, 1.0)[:, None]
-    w = m - a
-    s0 = -np.einsum("ij,ij->i", w, u)
-    s1 = s0 + length
-    x = np.maximum(np.abs(u[:, 0] * w[:, 1] - u[:, 1] * w[:, 0]), MIN_LATERAL_M)
-    x2 = x * x
-    out = (s1 / np.sqrt(x2 + s1 * s1) - s0 / np.sqrt(x2 + s0 * s0)) / x2
-    return np.where(moving, out, 0.0)
 
 
 class MineSensor:
@@ -256,7 +229,7 @@ class MineSensor:
             return []
         order = np.lexsort((j, robots[r]))
         r, j = r[order], j[order]
-        look = _inverse_cube_look(start[r], end[r], field.positions_m[j])
+        look = inverse_cube_look(start[r], end[r], field.positions_m[j])
         hazard = self.sensor.width_m**2 / (8.0 * math.pi) * look
         hit = rng.random(len(r)) < -np.expm1(-hazard)
         robot, mine = robots[r[hit]], j[hit]
@@ -338,7 +311,7 @@ class MineSensor:
         dist = np.empty(0)
         if len(robots) and np.any(target):
             start, end, r, j = self._segments_near(xy, robots, target)
-            d = _segment_distance(start[r], end[r], field.positions_m[j])
+            d = segment_distance(start[r], end[r], field.positions_m[j])
             keep = d <= self.range_m
             keys = robots[r[keep]].astype(np.int64) * m + j[keep]
             dist = d[keep]

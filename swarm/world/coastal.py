@@ -132,6 +132,17 @@ def breaker_depth(breaker_height_m: np.ndarray | float, gamma: float = BREAKING_
     return _out(hb / gamma)
 
 
+def surf_zone_mask(
+    elevation_m: np.ndarray, water: np.ndarray, breaker_height_m: float, min_depth_m: float = 0.05
+) -> np.ndarray:
+    """Cells in the surf zone: water (`water`, a boolean grid) shallower than the breaker depth
+    H_b / gamma and lower than the breaker crest (still water level 0, depths below `min_depth_m`
+    count as that)."""
+    depth = np.maximum(min_depth_m, -np.asarray(elevation_m, dtype=np.float64))
+    hb = float(breaker_height_m)
+    return np.asarray(water, bool) & (depth < hb / BREAKING_INDEX) & (np.asarray(elevation_m) < hb)
+
+
 def surf_zone_width(
     breaker_height_m: np.ndarray | float, a: float, gamma: float = BREAKING_INDEX
 ) -> np.ndarray | float:

@@ -482,6 +482,7 @@ def test_overrides_change_the_value():
             "swarm.count": 20,
             "hazards.surf.wave_height_m": 1.5,
             "tasks.0.sensor.sweep_width_m": 4.0,
+            "tasks.0.track_spacing_m": 2.5,
             "hazards.comms.cutoff_s": 3000,  # a section the file leaves out
             "phases.return_to_sea.enabled": True,
         },

@@ -15,6 +15,7 @@ from shapely.geometry import LineString, Polygon, box
 
 from swarm.errors import SwarmError
 from swarm.planning.coverage import (
+    MIN_PIECE_M,
     boustrophedon,
     default_track_angle_deg,
     detection_probability,
@@ -122,31 +123,62 @@ def test_boustrophedon_rejects_bad_input() -> None:
 # splitting among searchers --------------------------------------------------------------------
 
 
-def _best_bottleneck(lengths: list[float], n: int) -> float:
-    m = len(lengths)
-    best = math.inf
-    for cuts in itertools.combinations(range(1, m), min(n, m) - 1):
-        bounds = [0, *cuts, m]
-        best = min(best, max(sum(lengths[a:b]) for a, b in itertools.pairwise(bounds)))
-    return best
+def _route_position(tracks: list[LineString], piece: LineString) -> tuple[float, float]:
+    """Where `piece` starts and ends along the route (the tracks end to end), metres; raises if it
+    is not a stretch of one track."""
+    offset = 0.0
+    for t in tracks:
+        a, b = shapely.Point(piece.coords[0]), shapely.Point(piece.coords[-1])
+        if t.distance(a) < 1e-9 and t.distance(b) < 1e-9:
+            return offset + t.project(a), offset + t.project(b)
+        offset += t.length
+    raise AssertionError(f"{piece} is not on any track")
 
 
 @pytest.mark.parametrize("name", list(SHAPES))
-@pytest.mark.parametrize("n", [1, 2, 3, 4])
-def test_split_is_contiguous_complete_and_balanced(name, n) -> None:
+@pytest.mark.parametrize("n", [1, 2, 3, 4, 7])
+def test_split_is_contiguous_complete_and_equal(name, n) -> None:
     tracks = boustrophedon(SHAPES[name], 9.0)
-    runs = split_tracks(tracks, n)
+    runs = split_tracks(tracks, n, min_piece_m=0.0)
     assert len(runs) == n
-    assert [t for run in runs for t in run] == tracks  # contiguous, in driving order, nothing lost
-    assert all(run for run in runs)  # nobody idle while there are tracks
-    longest = max(track_length_m(run) for run in runs)
-    assert longest == pytest.approx(_best_bottleneck([t.length for t in tracks], n), rel=1e-9)
+    # every piece is a stretch of a track, and the pieces follow one another along the route with
+    # no gap and no overlap, from its start to its end
+    spans = [_route_position(tracks, piece) for run in runs for piece in run]
+    assert spans[0][0] == pytest.approx(0.0, abs=1e-9)
+    assert spans[-1][1] == pytest.approx(track_length_m(tracks), rel=1e-12)
+    for (_, end), (start, _) in itertools.pairwise(spans):
+        assert start == pytest.approx(end, abs=1e-6)
+    # each run is as long to drive as the next (its tracks, the drives between them and the drive
+    # into its first track), to within the longest drive between two tracks, where cuts fall back
+    joins = [math.dist(a.coords[-1], b.coords[0]) for a, b in itertools.pairwise(tracks)]
+    total = track_length_m(tracks) + sum(joins)
+    ends = [None, *(run[-1].coords[-1] for run in runs[:-1])]
+    for before, run in zip(ends, runs, strict=True):
+        drive = track_length_m(run) + sum(
+            math.dist(a.coords[-1], b.coords[0]) for a, b in itertools.pairwise(run)
+        )
+        drive += 0.0 if before is None else math.dist(before, run[0].coords[0])
+        assert abs(drive - total / n) <= max(joins, default=0.0) + 1e-6
+
+
+def test_split_keeps_no_sliver_and_more_searchers_shorten_the_longest_run() -> None:
+    tracks = boustrophedon(box(0, 0, 1000, 20), 2.5)
+    total = track_length_m(tracks)
+    joins = sum(math.dist(a.coords[-1], b.coords[0]) for a, b in itertools.pairwise(tracks))
+    longest = [max(track_length_m(r) for r in split_tracks(tracks, n)) for n in (8, 16, 32)]
+    for n, top in zip((8, 16, 32), longest, strict=True):
+        assert top <= (total + joins) / n + MIN_PIECE_M + 1e-9
+    assert longest[1] <= 0.55 * longest[0] and longest[2] <= 0.55 * longest[1]
+    for run in split_tracks(tracks, 13):
+        assert all(t.length >= MIN_PIECE_M - 1e-9 for t in run)
 
 
 def test_split_with_more_searchers_than_tracks() -> None:
+    """Two 50 m tracks 5 m apart among four searchers: 105 m to drive, cut every 26.25 m through
+    the tracks; the cut that falls in the 5 m drive between them moves to the second's start."""
     tracks = boustrophedon(box(0, 0, 50, 10), 5.0)
     runs = split_tracks(tracks, 4)
-    assert [len(r) for r in runs] == [1, 1, 0, 0]
+    assert [round(track_length_m(r), 9) for r in runs] == [26.25, 23.75, 23.75, 26.25]
     assert split_tracks([], 3) == [[], [], []]
     with pytest.raises(SwarmError):
         split_tracks(tracks, 0)

@@ -267,9 +267,11 @@ def test_plan_numbers(parsed, folders):
     assert column(md["Search"], "expected detection") == [f"{search['expected_detection']:.1%}"]
     summary = pairs(page.tables["Plan summary"])
     assert summary["robots"] == str(len(plan["robots"])) == str(data["summary"]["robots"])
-    # the verdict: detection against 0.5 and every relay link closing
+    # the verdict: detection after the expected losses against 0.5, and every relay link closing
     checks = {c["criterion"]: c for c in data["verdict"]["checks"]}
-    assert checks["expected detection (search_1)"]["target"] == 0.5
+    after = plan["budget"]["search"]["search_1"]["expected_detection_after_losses"]
+    assert checks["expected detection after losses (search_1)"]["target"] == 0.5
+    assert checks["expected detection after losses (search_1)"]["value"] == pytest.approx(after)
     assert checks["least relay link margin (relay_1)"]["value"] == pytest.approx(min(margins), abs=0.05)
     rows = md["Criteria a plan can check"]
     assert column(rows, "met") == ["yes" if c["met"] else "NO" for c in data["verdict"]["checks"]]

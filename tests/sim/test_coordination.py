@@ -3,6 +3,7 @@ promises, relays that break and heal, tasks taken over, mines found as the senso
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import numpy as np
@@ -12,7 +13,7 @@ from tiny_missions import write_mission
 
 from swarm.mission.load import load_mission
 from swarm.sim.env import SwarmEnv
-from swarm.sim.policy import ScriptedPolicy
+from swarm.sim.policy import ScriptedPolicy, split_polyline
 from swarm.sim.run import simulate
 
 #: Hazards that take nobody: for tests that isolate one mechanism.
@@ -156,7 +157,32 @@ def test_a_lost_searchers_track_is_finished_by_a_spare(tmp_path) -> None:
     (take,) = [ev for ev in env.events if ev["kind"] == "takeover"]
     j = env.agent_index[take["robot"]]
     assert take["role"] == "search" and env.role[j] == 1
-    np.testing.assert_allclose(env.routes.points[env.routes.end[j] - len(left) : env.routes.end[j]], left)
+    # the rest of the track is offered in pieces; the spare drives the one it won, through every one
+    # of its waypoints (the router may add detour points around blocked ground)
+    (won,) = [it for it in policy.items if it.taken_by == j]
+    route = env.routes.points[env.routes.start[j] : env.routes.end[j]]
+    np.testing.assert_allclose(route[-1], won.waypoints_m[-1])
+    for v in won.waypoints_m[1:]:
+        assert np.min(np.hypot(*(route - v).T)) < 1e-9
+    pieces = [it for it in policy.items if it.kind == "route"]
+    assert sum(np.hypot(*np.diff(it.waypoints_m, axis=0).T).sum() for it in pieces) == pytest.approx(
+        np.hypot(*np.diff(left, axis=0).T).sum()
+    )
+
+
+def test_split_polyline_pieces_join_up_and_keep_every_vertex() -> None:
+    rng = np.random.default_rng(4)
+    line = np.cumsum(rng.uniform(-20, 20, size=(40, 2)), axis=0)
+    pieces = split_polyline(line, 50.0)
+    lengths = [float(np.hypot(*np.diff(p, axis=0).T).sum()) for p in pieces]
+    total = float(np.hypot(*np.diff(line, axis=0).T).sum())
+    assert sum(lengths) == pytest.approx(total) and max(lengths) <= 50.0 + 1e-9
+    assert len(pieces) == math.ceil(total / 50.0)
+    for a, b in itertools.pairwise(pieces):
+        np.testing.assert_allclose(a[-1], b[0])
+    joined = np.vstack([pieces[0], *(p[1:] for p in pieces[1:])])
+    for v in line:  # every vertex of the line is still there, in order
+        assert np.min(np.hypot(*(joined - v).T)) < 1e-9
 
 
 def test_mines_found_match_the_sensor_model(tmp_path) -> None:

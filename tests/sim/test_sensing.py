@@ -15,9 +15,9 @@ from shapely.geometry import box
 
 from swarm.mission.schema import LateralRange, Sensor
 from swarm.planning.coverage import detection_probability
+from swarm.planning.detection import INVERSE_CUBE_FLOOR
 from swarm.sim.mines import MineField
 from swarm.sim.sensing import (
-    INVERSE_CUBE_FLOOR,
     Detection,
     MineSensor,
     lateral_range_curve,

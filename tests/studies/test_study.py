@@ -211,3 +211,61 @@ def test_a_bad_sweep_is_one_line_naming_the_key(tiny, tmp_path, sweep, names) ->
     lines = err.getvalue().strip().splitlines()
     assert len(lines) == 1 and names in lines[0] and "Traceback" not in err.getvalue()
     assert not out.exists()  # nothing written
+
+
+def test_a_failed_row_replays_with_swarm_simulate(tmp_path, capsys) -> None:
+    """`swarm simulate MISSION --seed <row seed> --set <row's swept values>` reproduces the run of a
+    study row: the same outcome and the same losses, cause, phase and time. Immobilization per
+    kilometre makes the losses depend on the routes driven, so the replay must plan as the study did."""
+    hazards = {**QUIET, "attrition": {"mtbf_h": 0.2}, "immobilization": {"per_km": 20.0}}
+    mission = _mission(tmp_path, "replay", hazards=hazards, seed=5)
+    spec = StudySpec(str(mission), runs=6, sweeps=parse_sweeps(["swarm.count=3"]), seed=11)
+    table, _ = run_study(spec, tmp_path / "study", workers=1)
+    rows = [r for r in table.to_pylist() if not r["success"] and r["lost"] > 0]
+    assert len(rows) >= 2, "the study must have failed runs with losses to replay"
+    for row in rows[:2]:
+        out = tmp_path / f"replay-{row['point']}-{row['run']}"
+        args = ["simulate", str(mission), "--seed", str(row["seed"]), "--workers", "1", "--out", str(out)]
+        assert main([*args, "--set", f"swarm.count={row['swarm.count']}"]) == 0
+        outcome = yaml.safe_load((out / "outcome.json").read_text())
+        assert outcome["success"] == row["success"]
+        assert outcome["lost"] == row["lost"]
+        replayed = sorted((x["cause"], x["phase"], round(x["t_s"], 3)) for x in _losses(out))
+        assert replayed == sorted((x["cause"], x["phase"], round(x["t_s"], 3)) for x in row["losses"])
+    capsys.readouterr()
+
+
+def _losses(folder: Path) -> list[dict]:
+    events = [yaml.safe_load(line) for line in (folder / "events.jsonl").read_text().splitlines()]
+    return [e for e in events if e["kind"] == "loss"]
+
+
+def test_twice_the_robots_never_succeed_less(tmp_path) -> None:
+    """A search of the small beach under random failures: with twice the robots the plan searches
+    with more robots and keeps more in reserve, so P(success) must not drop (one-sided, 2.5 sigma)."""
+    search = {
+        "type": "search",
+        "area": "search_beach",
+        "sensor": {"model": "inverse_cube", "sweep_width_m": 4.0},
+        "mark": False,
+    }
+    mission = _mission(
+        tmp_path,
+        "monotone",
+        tasks=[search],
+        success={"min_detection_fraction": 0.85},
+        phases={
+            "sea_transit": {"time_limit_s": 300},
+            "surf_crossing": {"time_limit_s": 300},
+            "beach_operations": {"time_limit_s": 420},
+            "return_to_sea": {"enabled": False},
+        },
+        hazards={**QUIET, "attrition": {"mtbf_h": 0.25}, "mines": {"count": 20, "trigger_probability": 0.0}},
+    )
+    spec = StudySpec(str(mission), runs=24, sweeps=parse_sweeps(["swarm.count=3,6"]), seed=3)
+    _, summary = run_study(spec, tmp_path / "study", workers=2)
+    (few, many) = summary["points"]
+    p1, p2 = few["success_rate"], many["success_rate"]
+    se = math.sqrt((p1 * (1 - p1) + p2 * (1 - p2)) / 24 + 1e-12)
+    assert p2 >= p1 - 2.5 * se, (p1, p2)
+    assert p2 > 0.5, "the bigger swarm must mostly succeed for the comparison to mean anything"

@@ -1,0 +1,381 @@
+"""What a plan budgets for: the robots a mission's hazards are expected to take, phase by phase, and
+a search designed to meet its criterion after them.
+
+Expected losses (`robot_losses`). Each robot's exposure (time at sea, in the surf, ashore; metres
+driven on each terrain class and inside the mine area) meets the mission's hazard rates, the same
+rates the simulator draws from (`swarm.sim.hazards`):
+
+- failure: 1 - exp(-t / MTBF) over the time from release to the end of the task window;
+- wave impact: 1 - (1 - p_hit)^(t_surf / T), one breaker a wave period while in the surf zone,
+  p_hit = `SurfHazard.impact_damage_probability`; t_surf is the swim over surf-zone cells at swim
+  speed, and at least `SURF_TRANSIT_S`;
+- immobilization: per_km x mode factor x (1 + (slip / 0.3)^2) per metre on each class, with each
+  mode's steady slip at cruise (the cost map's mode speeds);
+- rock: damage_per_km per metre on rock;
+- mine: mines met per metre (density x twice the trigger radius) x the chance the sensor has not
+  found the mine before the robot reaches it (inverse cube: exp(-W^2 / (16 pi r^2)) for a mine
+  dead ahead) x trigger_probability;
+- radio dropout: 1 - exp(-rate x t).
+
+Causes combine as independent competing risks: P(lost) = 1 - prod(1 - p_cause).
+
+Search design (`design_search`). The search must be over before its window closes: the synchronized
+clearance less the time to clear the standoff and to bring markers onto the mines found, or the end
+of beach operations. With `track_spacing_m` unset the spacing is the widest whose expected
+detection gives the success criterion with `DESIGN_CONFIDENCE` (the detected fraction of N mines is
+binomial), unless the robots cannot drive that much track in the window (less the searcher time
+the losses are expected to cost), in which case it is the tightest they can. As many robots search
+as that spacing needs; of the others, as many as the losses are expected to take wait as reserves
+inside the search area (they take over a lost searcher's track and mark the mines the searchers
+report: marking never takes a searcher off its track); any robot beyond both searches too. More
+robots therefore tighten the spacing until the criterion holds, then cover the losses, then
+shorten the search, and never idle.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+import shapely
+from scipy import optimize
+from scipy.special import erf
+from scipy.stats import binom
+from shapely.geometry.base import BaseGeometry
+
+from swarm.mission.schema import Mission
+from swarm.planning import CostMap
+from swarm.world.coastal import surf_zone_mask
+
+#: The detection criterion is designed to hold with this probability over the mine field's draw.
+DESIGN_CONFIDENCE = 0.95
+#: The tightest spacing the planner chooses, as a fraction of the sweep width.
+MIN_SPACING_FRACTION = 0.25
+#: Time per track end: two pivots of 90 degrees at the controller's turn rate (s).
+TURN_S = 6.0
+#: Share of the window kept free of search at its end, for the unexpected (a detour, a takeover).
+WINDOW_SLACK = 0.1
+#: Standoff clearing: straight-line time at cruise x factor + allowance, and the margin past the
+#: standoff (the scripted policy's own numbers: `swarm.sim.policy`).
+RETREAT_FACTOR, RETREAT_ALLOWANCE_S, STANDOFF_MARGIN_M = 1.5, 30.0, 10.0
+#: Mark, immobilization: slip scale of the immobilization rate (schema `Immobilization`).
+SLIP_SCALE = 0.3
+PHASE_NAMES = ("sea", "surf", "beach")
+#: `driven_by_class`'s key for the metres in the surf zone.
+SURF_ZONE = "surf zone"
+#: The least time a robot spends among breakers on its way ashore (s). The surf zone along a swim
+#: can be a few metres wide on the map, but the robot is surged back and forth at the waterline
+#: until its wheels find traction: in our simulator robots take 95-215 s (mean 124 s) from their
+#: first breaker to dry ground on gentle_fine's 1 m breakers (mine_clear, seed 1, hazards off).
+SURF_TRANSIT_S = 120.0
+
+
+def hazards_enabled(mission: Mission) -> bool:
+    return bool(getattr(mission.hazards, "enabled", True))
+
+
+def mine_areas(mission: Mission) -> list[BaseGeometry]:
+    """The regions mines lie in: hazards.mines.area, or every search task's area."""
+    bm = mission.beach_map
+    spec = mission.hazards.mines
+    names = [spec.area] if spec.area is not None else [t.area for t in mission.tasks_of("search")]
+    return [bm.regions[n].geometry for n in names]
+
+
+def expected_mine_count(mission: Mission) -> float:
+    """Mines expected in the mine area: the count, or density x area; 0 without either."""
+    spec = mission.hazards.mines
+    if spec.count is not None:
+        return float(spec.count)
+    areas = mine_areas(mission)
+    if spec.density_per_ha is None or not areas:
+        return 0.0
+    return spec.density_per_ha * shapely.union_all(areas).area / 1e4
+
+
+# --- exposure and losses -----------------------------------------------------------------------------
+
+
+@dataclass
+class Exposure:
+    """What one robot goes through: seconds in each phase and metres driven on each terrain class."""
+
+    sea_s: float
+    surf_s: float
+    beach_s: float
+    driven_m: dict[str, float] = field(default_factory=dict)
+    in_mine_area_m: float = 0.0
+
+
+def surf_cells(mission: Mission) -> np.ndarray:
+    """The map's surf zone (`swarm.world.coastal.surf_zone_mask`, as the simulator's physics has it)."""
+    bm = mission.beach_map
+    lib = mission.terrain_library
+    water = np.array([lib[c].is_water for c in bm.terrain_classes], dtype=bool)[bm.terrain.astype(np.intp)]
+    mask = surf_zone_mask(bm.elevation_m, water, mission.hazards.surf.wave_height_m)
+    if "surf" in bm.terrain_classes:
+        mask |= bm.terrain == bm.class_index("surf")
+    return mask
+
+
+def driven_by_class(
+    cm: CostMap, polyline: np.ndarray, mine_area: BaseGeometry | None, surf: np.ndarray | None = None
+) -> tuple[dict[str, float], float]:
+    """Metres of `polyline` on each terrain class, and inside `mine_area` (sampled at half a cell);
+    with a `surf` mask, the metres on it are counted under the class name "surf zone" as well."""
+    pts = np.asarray(polyline, dtype=np.float64).reshape(-1, 2)
+    if len(pts) < 2:
+        return {}, 0.0
+    seg = np.diff(pts, axis=0)
+    length = np.hypot(seg[:, 0], seg[:, 1])
+    step = cm.cell_m / 2.0
+    k = np.maximum(1, np.ceil(length / step).astype(np.int64))
+    t = (np.arange(int(k.sum())) - np.repeat(np.cumsum(k) - k, k) + 0.5) / np.repeat(k, k)
+    mid = np.repeat(pts[:-1], k, axis=0) + np.repeat(seg, k, axis=0) * t[:, None]
+    piece = np.repeat(length / k, k)
+    row, col = cm.cell_of(mid[:, 0], mid[:, 1])
+    cls = cm.terrain[row, col].astype(np.intp)
+    per_class = np.bincount(cls, weights=piece, minlength=len(cm.terrain_classes))
+    out = {cm.terrain_classes[c]: float(v) for c, v in enumerate(per_class) if v > 0}
+    if surf is not None:
+        out[SURF_ZONE] = float(piece[surf[row, col]].sum())
+    inside = 0.0
+    if mine_area is not None:
+        inside = float(piece[shapely.contains_xy(mine_area, mid[:, 0], mid[:, 1])].sum())
+    return out, inside
+
+
+def undetected_at_contact(mission: Mission) -> float:
+    """Chance the search sensor has not found a mine by the time a robot driving at it sets it off."""
+    search = mission.tasks_of("search")
+    if not search:
+        return 1.0
+    sensor = search[0].sensor
+    r = 0.25  # the simulator's trigger radius (swarm.sim.mines.DEFAULT_TRIGGER_RADIUS_M)
+    if sensor.model == "inverse_cube" and sensor.lateral_range is None:
+        return math.exp(-(sensor.width_m**2) / (16.0 * math.pi * r * r))
+    return 0.0 if sensor.width_m / 2.0 > r else 1.0
+
+
+def robot_losses(mission: Mission, cm: CostMap, exposure: Exposure) -> dict[str, dict[str, float]]:
+    """Probability the robot is lost in each phase, by cause (module docstring)."""
+    out: dict[str, dict[str, float]] = {p: {} for p in PHASE_NAMES}
+    if not hazards_enabled(mission):
+        return out
+    hz = mission.hazards
+    mtbf_s = hz.attrition.mtbf_h * 3600.0
+    dropout = hz.comms.dropout_per_h / 3600.0
+    for phase, t in (("sea", exposure.sea_s), ("surf", exposure.surf_s), ("beach", exposure.beach_s)):
+        out[phase]["failure"] = -math.expm1(-t / mtbf_s)
+        if dropout > 0:
+            out[phase]["cut_off"] = -math.expm1(-dropout * t)
+    hits = exposure.surf_s / hz.surf.wave_period_s
+    out["surf"]["wave_impact"] = -math.expm1(hits * math.log1p(-hz.surf.impact_damage_probability()))
+    names = cm.speeds.names
+    nominal = cm.speeds.nominal_wheel_speed_mps
+    slip = {n: 1.0 - float(v) / nominal for n, v in zip(names, cm.speeds.speed_mps, strict=True)}
+    lib = mission.terrain_library
+    stuck = 0.0
+    rock = 0.0
+    for cls, metres in exposure.driven_m.items():
+        if cls == SURF_ZONE or lib[cls].is_water:
+            continue
+        s = min(max(slip.get(cls, 0.0), 0.0), 1.0)
+        factor = hz.immobilization.mode_factors.get(cls, 1.0) * (1.0 + (s / SLIP_SCALE) ** 2)
+        stuck += hz.immobilization.per_km / 1000.0 * factor * metres
+        if cls == "rock":
+            rock += hz.rocks.damage_per_km / 1000.0 * metres
+    out["beach"]["immobilized"] = -math.expm1(-stuck)
+    out["beach"]["rock"] = -math.expm1(-rock)
+    areas = mine_areas(mission)
+    n_mines = expected_mine_count(mission)
+    if n_mines > 0 and areas:
+        density = n_mines / shapely.union_all(areas).area
+        met = density * 2 * 0.25 * exposure.in_mine_area_m
+        rate = met * undetected_at_contact(mission) * hz.mines.trigger_probability
+        out["beach"]["mine"] = -math.expm1(-rate)
+    return {p: {c: v for c, v in d.items() if v > 0} for p, d in out.items()}
+
+
+def lost_probability(losses: dict[str, dict[str, float]], phases: tuple[str, ...] = PHASE_NAMES) -> float:
+    """P(lost in any of `phases`), the causes independent."""
+    survive = 1.0
+    for p in phases:
+        for v in losses.get(p, {}).values():
+            survive *= 1.0 - v
+    return 1.0 - survive
+
+
+# --- search design ---------------------------------------------------------------------------------
+
+
+@dataclass
+class SearchDesign:
+    """How many robots search and wait, at what spacing, and what that should achieve."""
+
+    searchers: int
+    reserves: int
+    spacing_m: float
+    spacing_from: str  # "mission" (track_spacing_m) or "planned"
+    window_s: tuple[float, float]  # the search may run from, to (mission time)
+    search_time_s: float  # one searcher's run, at the planning speed
+    speed_mps: float
+    target_detection: float  # what the design aims for: the criterion with DESIGN_CONFIDENCE
+    mines_expected: float
+    min_spacing_m: float  # the tightest spacing the planner may choose (time, or the sensor)
+    overhead: float  # run time per metre of track over 1 / speed (turns at the track ends)
+    note: str = ""
+
+    def run_time_s(self, area_m2: float, spacing_m: float) -> float:
+        """One searcher's run over its share of `area_m2` at `spacing_m`."""
+        return area_m2 / spacing_m / self.searchers / self.speed_mps * self.overhead
+
+    def tighten(self, model: str, width_m: float, spacing_m: float, expected: float) -> float | None:
+        """A tighter spacing when the tracks laid at `spacing_m` are expected to find `expected`,
+        short of the target: the ground and the edges cost expected / nominal of Koopman's formula,
+        so ask the formula for that much more. None when the spacing is the mission's, already the
+        tightest allowed, or the target is met."""
+        if self.spacing_from != "planned" or expected >= self.target_detection - 1e-3:
+            return None
+        if spacing_m <= self.min_spacing_m * 1.001:
+            return None
+        kept = expected / max(nominal_detection(model, width_m, spacing_m), 1e-9)
+        want = min(self.target_detection / max(kept, 1e-9), 1.0 - 1e-9)
+        lo = self.min_spacing_m
+        if nominal_detection(model, width_m, lo) < want:
+            return lo
+        return float(optimize.brentq(lambda s: nominal_detection(model, width_m, s) - want, lo, spacing_m))
+
+
+def search_speed_mps(mission: Mission, cm: CostMap, polygon: BaseGeometry) -> float:
+    """The robot's mean speed over the free ground of `polygon` at the mission's cruise wheel speed:
+    the harmonic mean of the terrain speeds (time per metre averaged over the area's cells)."""
+    rows, cols = np.nonzero(~cm.blocked)
+    x, y = cm.center_of(rows, cols)
+    inside = shapely.contains_xy(polygon, x, y)
+    cost = cm.cost_per_m[rows[inside], cols[inside]]
+    cost = cost[np.isfinite(cost)]
+    per_m = float(cost.mean()) if len(cost) else 1.0
+    scale = mission.robot.wheel_speed_mps / cm.speeds.nominal_wheel_speed_mps
+    return cm.speeds.reference_speed_mps * scale / per_m
+
+
+def search_window_s(mission: Mission, task, start_s: float) -> tuple[float, float]:
+    """When the search must be done: the clearance less the standoff retreat and the marking time,
+    else the end of beach operations; less `WINDOW_SLACK` of the window."""
+    v = mission.robot.wheel_speed_mps
+    if task.clearance is not None:
+        retreat = RETREAT_FACTOR * (task.clearance.standoff_m + STANDOFF_MARGIN_M) / v + RETREAT_ALLOWANCE_S
+        end = task.clearance.at_s - retreat
+    else:
+        end = mission.phases.beach_end_s
+    end -= WINDOW_SLACK * max(end - start_s, 0.0)
+    return start_s, end
+
+
+def detection_needed(criterion: float, mines: float, confidence: float = DESIGN_CONFIDENCE) -> float:
+    """The least per-mine detection probability p with P(Binomial(N, p) >= criterion x N) >=
+    `confidence` (N the expected mine count, rounded); the criterion itself without mines."""
+    n = round(mines)
+    if n <= 0:
+        return criterion
+    need = math.ceil(criterion * n - 1e-9)
+
+    def short(p: float) -> float:
+        return float(binom.sf(need - 1, n, p)) - confidence
+
+    if short(1.0 - 1e-12) < 0:
+        return 1.0
+    return float(optimize.brentq(short, 1e-9, 1.0 - 1e-12, xtol=1e-6))
+
+
+def p_criterion_met(criterion: float, mines: float, p: float) -> float:
+    """P(detected fraction >= criterion) for round(`mines`) mines each found with probability p."""
+    n = round(mines)
+    if n <= 0:
+        return 1.0 if p >= criterion else 0.0
+    return float(binom.sf(math.ceil(criterion * n - 1e-9) - 1, n, min(max(p, 0.0), 1.0)))
+
+
+def nominal_detection(model: str, width_m: float, spacing_m: float) -> float:
+    """Koopman's detection for parallel tracks (`coverage.detection_probability`'s formulas)."""
+    r = width_m / spacing_m
+    if model == "cookie_cutter":
+        return min(1.0, r)
+    if model == "inverse_cube":
+        return float(erf(math.sqrt(math.pi) / 2.0 * r))
+    return -math.expm1(-r)
+
+
+def design_search(
+    mission: Mission,
+    task,
+    *,
+    robots: int,
+    area_m2: float,
+    speed_mps: float,
+    start_s: float,
+    loss_before_end: float,
+    reach: float,
+    row_m: float,
+) -> SearchDesign:
+    """Searchers, reserves and spacing for `robots` robots (module docstring).
+
+    `loss_before_end`: one robot's chance of being lost before the search window closes; `reach`:
+    the detection perfect coverage of the drivable ground would give (mines on ground no robot can
+    reach are found only from its edge)."""
+    window = search_window_s(mission, task, start_s)
+    span = max(window[1] - window[0], 1.0)
+    mines = expected_mine_count(mission)
+    target = detection_needed(mission.success.min_detection_fraction, mines)
+    model = "random" if task.sensor.model == "random_search" else task.sensor.model
+    w = task.sensor.width_m
+    overhead = 1.0 + TURN_S * speed_mps / max(row_m, 1.0)
+    # searcher time the losses are expected to cost (a lost searcher has driven half its run)
+    kept = 1.0 - loss_before_end / 2.0
+
+    def fits(searchers: int) -> float:
+        """The tightest spacing `searchers` can sweep in the window."""
+        return area_m2 / (searchers * speed_mps * span * kept) * overhead
+
+    note = ""
+    if task.track_spacing_m is not None:
+        spacing, source = task.track_spacing_m, "mission"
+    else:
+        source = "planned"
+        if nominal_detection(model, w, MIN_SPACING_FRACTION * w) * reach < target:
+            wanted = MIN_SPACING_FRACTION * w
+            note = f"no spacing reaches the {target:.1%} the criterion needs: the ground allows {reach:.1%}"
+        elif nominal_detection(model, w, 2 * w) * reach >= target:
+            wanted = 2 * w
+        else:
+            wanted = optimize.brentq(
+                lambda s: nominal_detection(model, w, s) * reach - target, MIN_SPACING_FRACTION * w, 2 * w
+            )
+        spacing = max(wanted, fits(robots))
+        if spacing > wanted:
+            late = f"{robots} searchers cannot sweep at {wanted:.2f} m before {window[1]:.0f} s"
+            note = "; ".join(filter(None, [note, f"{late}: spacing {spacing:.2f} m"]))
+    # as many searchers as that spacing needs in the window; of the rest, as many reserves as the
+    # losses are expected to take; any robot beyond both searches too (the runs get shorter)
+    needed = math.ceil(area_m2 * overhead / (spacing * speed_mps * span * kept) - 1e-9)
+    reserves = max(0, min(math.ceil(robots * loss_before_end - 1e-9), robots - max(needed, 1)))
+    searchers = robots - reserves
+    lo = max(MIN_SPACING_FRACTION * w, fits(searchers))
+    design = SearchDesign(
+        searchers=searchers,
+        reserves=reserves,
+        spacing_m=float(spacing),
+        spacing_from=source,
+        window_s=window,
+        search_time_s=0.0,
+        speed_mps=speed_mps,
+        target_detection=target,
+        mines_expected=mines,
+        min_spacing_m=float(lo),
+        overhead=overhead,
+        note=note,
+    )
+    design.search_time_s = design.run_time_s(area_m2, design.spacing_m)
+    return design

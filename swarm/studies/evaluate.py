@@ -1,0 +1,107 @@
+"""`swarm plan --evaluate N`: the plan simulated N times with the study machinery, so the plan report
+can put what the simulation delivers next to what the plan promises.
+
+The evaluation is a study of one point (the mission with the plan's overrides and plan seed as
+single-valued sweeps) in ``<plan folder>/evaluation/``, resumable like any study. When the lower
+bound of P(success) misses the target, a quick sweep of the swarm size (1.5x and 2x the count, with
+`QUICK_RUNS` runs each, or N if that is fewer) suggests the size to study properly.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+
+from swarm.files import write_text_atomic
+from swarm.studies import stats
+from swarm.studies.study import StudySpec, run_study
+from swarm.studies.sweep import Sweep
+
+#: Runs per size of the quick sweep that suggests a size when the target is missed.
+QUICK_RUNS = 16
+#: Multiples of the planned swarm size the quick sweep tries.
+QUICK_FACTORS = (1.5, 2.0)
+EVALUATION_FILE = "evaluation.json"
+
+Progress = Callable[[int, int], None]
+
+
+def evaluate_plan(
+    mission_path: str | Path,
+    out: str | Path,
+    *,
+    runs: int,
+    count: int,
+    overrides: dict[str, object] | None = None,
+    plan_seed: int | None = None,
+    target: float = 0.9,
+    confidence: float = 0.95,
+    workers: int | None = None,
+    progress: Progress | None = None,
+) -> dict:
+    """Simulate the plan `runs` times; write and return the evaluation (module docstring)."""
+    fixed = dict(overrides or {})
+    if plan_seed is not None:
+        fixed["seed"] = plan_seed
+    sweeps = [Sweep(k, (v,)) for k, v in fixed.items()]
+    folder = Path(out) / "evaluation"
+    spec = StudySpec(str(mission_path), runs, sweeps, seed=0, target=target, confidence=confidence)
+    table, summary = run_study(spec, folder / "plan", workers=workers, progress=progress)
+    cols = table.to_pydict()
+    (point,) = summary["points"]
+    detection = [v for v in cols.get("value_detection", []) if v is not None]
+    result = {
+        "runs": point["runs"],
+        "successes": point["successes"],
+        "success_rate": point["success_rate"],
+        "wilson_low": point["wilson_low"],
+        "wilson_high": point["wilson_high"],
+        "target": target,
+        "confidence": confidence,
+        "detection": stats.distribution(np.asarray(detection, dtype=np.float64)) if detection else None,
+        "detection_values": detection,
+        "lost": stats.distribution(np.asarray([len(x) for x in cols["losses"]], dtype=np.float64)),
+        "lost_values": [len(x) for x in cols["losses"]],
+        "losses_by_cause": point["losses_by_cause"],
+        "losses_by_phase": point["losses_by_phase"],
+        "seeds": cols["seed"],
+        "folder": str(folder / "plan"),
+        "suggested_count": None,
+    }
+    if point["wilson_low"] < target:
+        sizes = sorted({max(count + 1, math.ceil(count * f)) for f in QUICK_FACTORS})
+        quick = StudySpec(
+            str(mission_path),
+            min(runs, QUICK_RUNS),
+            [Sweep("swarm.count", tuple(sizes)), *(s for s in sweeps if s.key != "swarm.count")],
+            seed=1,
+            target=target,
+            confidence=confidence,
+        )
+        _, qs = run_study(quick, folder / "sizes", workers=workers, progress=progress)
+        result["sizes"] = [
+            {
+                "count": p["params"]["swarm.count"],
+                "runs": p["runs"],
+                "success_rate": p["success_rate"],
+                "wilson_low": p["wilson_low"],
+                "wilson_high": p["wilson_high"],
+            }
+            for p in qs["points"]
+        ]
+        met = [p["params"]["swarm.count"] for p in qs["points"] if p["success_rate"] >= target]
+        result["suggested_count"] = min(met) if met else None
+    write_text_atomic(Path(out) / EVALUATION_FILE, json.dumps(result, indent=1, sort_keys=True) + "\n")
+    return result
+
+
+def read_evaluation(folder: str | Path) -> dict | None:
+    """The evaluation written beside a plan, or None."""
+    path = Path(folder) / EVALUATION_FILE
+    if not path.is_file():
+        return None
+    return json.loads(path.read_text(encoding="utf-8"))

@@ -1,0 +1,111 @@
+"""The plan's budget: expected losses against the hazard formulas, the detection a criterion needs
+against the binomial, and a search design that uses extra robots instead of idling them."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+from scipy.stats import binom
+
+from swarm.mission import budget, load_mission
+from swarm.planning import build_costmap
+
+MINE_CLEAR = "missions/mine_clear.yaml"
+
+
+@pytest.fixture(scope="module")
+def mission():
+    return load_mission(MINE_CLEAR)
+
+
+@pytest.fixture(scope="module")
+def costmap(mission):
+    return build_costmap(mission.beach_map, mission.robot_params, mission.terrain_library)
+
+
+def test_losses_follow_the_hazard_formulas(mission, costmap) -> None:
+    hz = mission.hazards
+    exposure = budget.Exposure(
+        sea_s=1000.0, surf_s=120.0, beach_s=5000.0, driven_m={"wet_hard_sand": 1000.0, "rock": 200.0}
+    )
+    losses = budget.robot_losses(mission, costmap, exposure)
+    mtbf = hz.attrition.mtbf_h * 3600
+    for phase, t in (("sea", 1000.0), ("surf", 120.0), ("beach", 5000.0)):
+        assert losses[phase]["failure"] == pytest.approx(1 - math.exp(-t / mtbf))
+    hit = hz.surf.impact_damage_probability()
+    assert losses["surf"]["wave_impact"] == pytest.approx(1 - (1 - hit) ** (120.0 / hz.surf.wave_period_s))
+    assert losses["beach"]["rock"] == pytest.approx(1 - math.exp(-hz.rocks.damage_per_km * 0.2))
+    # immobilization: per km x mode factor x (1 + (slip/0.3)^2), slip from the steady mode speeds
+    names = list(costmap.speeds.names)
+    slip = {
+        n: 1 - costmap.speeds.speed_mps[names.index(n)] / costmap.speeds.nominal_wheel_speed_mps
+        for n in names
+    }
+    rate = sum(
+        hz.immobilization.per_km
+        * km
+        * hz.immobilization.mode_factors.get(c, 1.0)
+        * (1 + (slip[c] / 0.3) ** 2)
+        for c, km in (("wet_hard_sand", 1.0), ("rock", 0.2))
+    )
+    assert losses["beach"]["immobilized"] == pytest.approx(1 - math.exp(-rate))
+    # independent competing risks
+    survive = math.prod(1 - p for phase in losses.values() for p in phase.values())
+    assert budget.lost_probability(losses) == pytest.approx(1 - survive)
+
+
+def test_a_mine_met_undetected_is_rare_with_an_inverse_cube_sensor(mission) -> None:
+    """Dead ahead, a mine is looked at with integral ds/r^3 = 1/(2 r^2) before the robot is within
+    the trigger radius r: missed with exp(-W^2/(8 pi) / (2 r^2))."""
+    w = mission.tasks_of("search")[0].sensor.width_m
+    assert budget.undetected_at_contact(mission) == pytest.approx(
+        math.exp(-(w**2) / (8 * math.pi) / (2 * 0.25**2))
+    )
+
+
+@pytest.mark.parametrize("mines", [10, 20, 200])
+def test_the_detection_a_criterion_needs_is_the_binomial_quantile(mines) -> None:
+    p = budget.detection_needed(0.85, mines, confidence=0.95)
+    need = math.ceil(0.85 * mines)
+    assert binom.sf(need - 1, mines, p) == pytest.approx(0.95, abs=1e-4)
+    assert budget.p_criterion_met(0.85, mines, p) == pytest.approx(0.95, abs=1e-4)
+    assert binom.sf(need - 1, mines, p - 0.01) < 0.95
+    # more mines, a tighter binomial: less margin above the criterion is needed
+    assert budget.detection_needed(0.85, 2 * mines) < p
+
+
+def _design(mission, robots: int, **kw):
+    task = mission.tasks_of("search")[0]
+    args = {
+        "area_m2": 80_000.0,
+        "speed_mps": 0.55,
+        "start_s": 1300.0,
+        "loss_before_end": 0.2,
+        "reach": 0.95,
+        "row_m": 900.0,
+    }
+    args.update(kw)
+    return budget.design_search(mission, task, robots=robots, **args)
+
+
+def test_extra_robots_tighten_the_search_then_cover_losses_then_shorten_it(mission) -> None:
+    small, big, huge = (_design(mission, n) for n in (12, 24, 96))
+    for d, n in ((small, 12), (big, 24), (huge, 96)):
+        assert d.searchers + d.reserves == n
+        # as tight as the criterion needs, and no tighter than the searchers can sweep in time
+        koopman = budget.nominal_detection("inverse_cube", 3.0, d.spacing_m)
+        assert koopman * 0.95 >= d.target_detection - 1e-6 or d.spacing_m == pytest.approx(d.min_spacing_m)
+        assert d.run_time_s(80_000.0, d.spacing_m) <= (d.window_s[1] - d.window_s[0]) * (1 - 0.2 / 2) + 1e-6
+    # 12 robots cannot sweep tight enough: all search, none wait, and the plan says so
+    assert small.reserves == 0 and "cannot sweep" in small.note
+    assert small.spacing_m > big.spacing_m
+    # 96 robots: the criterion's spacing, the expected losses in reserve, the rest shorten the runs
+    assert huge.reserves == math.ceil(96 * 0.2)
+    assert huge.search_time_s < big.search_time_s
+    assert huge.spacing_m >= big.spacing_m - 1e-9
+
+
+def test_unreachable_criterion_is_said(mission) -> None:
+    d = _design(mission, 24, reach=0.5)
+    assert "no spacing reaches" in d.note and d.spacing_m == pytest.approx(d.min_spacing_m)

@@ -1,0 +1,60 @@
+"""The flagship mission's plan holds in simulation when nothing goes wrong: the mines found match
+the plan's expected detection, and the searchers sweep the ground the plan swept."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+import shapely
+from shapely.geometry import LineString
+
+from swarm.mission.load import load_mission
+from swarm.mission.plan import plan_mission
+from swarm.sim.layout import ROLES
+from swarm.sim.run import simulate
+from swarm.studies.stats import wilson_interval
+
+MINE_CLEAR = Path(__file__).resolve().parents[2] / "missions" / "mine_clear.yaml"
+#: Every hazard off; 200 mines a run so that two runs give a +-3% interval.
+NO_HAZARDS = {
+    "hazards.attrition.mtbf_h": 1.0e6,
+    "hazards.immobilization.per_km": 0.0,
+    "hazards.rocks.damage_per_km": 0.0,
+    "hazards.mines.trigger_probability": 0.0,
+    "hazards.surf.damage_h50_m": 100.0,
+    "hazards.mines.count": 200,
+}
+
+
+def _driven_swath(log, area, width_m: float) -> float:
+    """Share of `area` within W/2 of where the searchers drove (ashore, as searchers)."""
+    search = ROLES.index("search")
+    lines = []
+    for i in range(log.xy_m.shape[1]):
+        on = (log.role[:, i] == search) & log.alive[:, i] & np.isfinite(log.xy_m[:, i, 0])
+        if on.sum() > 1:
+            lines.append(LineString(log.xy_m[on, i]))
+    swath = shapely.union_all([line.buffer(width_m / 2.0) for line in lines])
+    return float(swath.intersection(area).area / area.area)
+
+
+@pytest.mark.slow
+def test_with_no_hazards_the_simulation_finds_what_the_plan_expects() -> None:
+    mission = load_mission(MINE_CLEAR, NO_HAZARDS)
+    plan = plan_mission(mission, seed=mission.seed, workers=1)
+    (search,) = plan.search
+    area = mission.beach_map.regions["search_beach"].geometry
+    found = total = 0
+    for seed in (1, 2):
+        log = simulate(mission, seed=seed, plan=plan)
+        assert not [x for x in log.losses if x["cause"] != "immobilized"]
+        found += int(np.sum(log.mines_state["detected"]))
+        total += len(log.mines_m)
+        driven = _driven_swath(log, area, search.sweep_width_m)
+        planned = shapely.union_all([t.buffer(search.sweep_width_m / 2) for run in search.tracks for t in run])
+        assert driven >= 0.95 * planned.intersection(area).area / area.area
+    low, high = wilson_interval(found, total, 0.95)
+    assert high - low <= 0.1  # enough mines for a +-5% interval
+    assert low <= search.expected_detection <= high, (found, total, search.expected_detection)
