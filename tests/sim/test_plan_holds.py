@@ -53,7 +53,9 @@ def test_with_no_hazards_the_simulation_finds_what_the_plan_expects() -> None:
         found += int(np.sum(log.mines_state["detected"]))
         total += len(log.mines_m)
         driven = _driven_swath(log, area, search.sweep_width_m)
-        planned = shapely.union_all([t.buffer(search.sweep_width_m / 2) for run in search.tracks for t in run])
+        planned = shapely.union_all(
+            [t.buffer(search.sweep_width_m / 2) for run in search.tracks for t in run]
+        )
         assert driven >= 0.95 * planned.intersection(area).area / area.area
     low, high = wilson_interval(found, total, 0.95)
     assert high - low <= 0.1  # enough mines for a +-5% interval
