@@ -304,6 +304,12 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
     _check_output(args.out, "--out", (".yaml", ".yml"))
     robot = load_robot(args.robot)
     base = _choose_mode(args)
+    if args.mode is not None:
+        chosen = f"mode '{base.name}' (--mode)"
+    elif args.terrain is not None:
+        chosen = f"mode '{base.name}' (the only mode in {args.terrain})"
+    else:
+        chosen = f"mode '{base.name}' (the default: no --mode given; say --mode soft_sand for a sand run)"
     runs = _runs(args, robot)
     free = None
     if args.free:
@@ -318,6 +324,8 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
                 )
     if args.max_evaluations < 1:
         raise InputError("command line", "--max-evaluations", args.max_evaluations, "a positive integer")
+    if not args.json:
+        print(f"fitting {args.model} coefficients, starting from terrain {chosen}", file=sys.stderr)
     with tqdm(desc=f"calibrating {args.model}", unit="sim", disable=args.json, file=sys.stderr) as bar:
         result = calibrate(
             runs,
@@ -336,6 +344,8 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
                 {
                     "model": result.model,
                     "mode": result.mode.name,
+                    "fitted_from": base.name,
+                    "fitted_from_why": chosen,
                     "out": str(args.out),
                     "parameters": result.parameters,
                     "std_errors": result.std_errors,
@@ -354,7 +364,7 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
     rows = [before[0]] + [[f"{r[0]} (start)", *r[1:]] for r in before[1:]]
     rows += [[f"{r[0]} (fitted)", *r[1:]] for r in after[1:]]
     print(_table(rows))
-    print(f"wrote terrain mode '{result.mode.name}' to {args.out}")
+    print(f"wrote terrain mode '{result.mode.name}' to {args.out}, fitted from terrain {chosen}")
     return 0
 
 
@@ -388,6 +398,9 @@ def _cmd_map_info(args: argparse.Namespace) -> int:
     print(
         f"cell       {info['cell_m']:g} m; origin ({x0:g}, {y0:g}) m; x {x0:g}..{x1:g} m, y {y0:g}..{y1:g} m"
     )
+    if "crs" in info:
+        e, n = info["crs_origin_m"]
+        print(f"crs        {info['crs']}; origin at easting {e:.2f} m, northing {n:.2f} m")
     print(
         f"elevation  {info['elevation_min_m']:.2f} .. {info['elevation_max_m']:.2f} m; "
         f"max slope {info['max_slope_deg']:.1f} deg; impassable {_fraction(info['impassable_fraction'])}"
@@ -526,7 +539,7 @@ def _add_path_command(commands) -> None:
 
 # --- swarm plan: a mission plan (swarm/mission/plan.py) ---------------------------------------------
 def _add_plan_command(commands) -> None:
-    """`swarm plan MISSION.yaml [--seed N] [--out DIR]`."""
+    """`swarm plan MISSION.yaml [--seed N] [--out DIR] [--set KEY=VALUE ...] [--evaluate N]`."""
     plan = commands.add_parser(
         "plan", help="allocate a mission's tasks, plan every robot's route, write plan and report"
     )
@@ -542,6 +555,7 @@ def _add_plan_command(commands) -> None:
         metavar="DIR",
         help="output folder (default: reports/<mission>-<YYYYmmdd-HHMMSS>/)",
     )
+    _add_set_option(plan)
     plan.add_argument("--workers", type=int, help="planning processes (default: the CPU count)")
     plan.add_argument(
         "--evaluate",
@@ -575,9 +589,10 @@ def _cmd_plan(args: argparse.Namespace) -> int:
         raise InputError("command line", "--evaluate", args.evaluate, "a number of runs >= 0")
     if not 0.0 < args.target < 1.0:
         raise InputError("command line", "--target", args.target, "a probability strictly between 0 and 1")
+    overrides = _overrides(args.overrides)
     if not args.mission.is_file():
         raise InputError("command line", "MISSION.yaml", str(args.mission), "an existing mission YAML file")
-    mission = load_mission(args.mission)
+    mission = load_mission(args.mission, overrides, overrides_source="--set")
     out = args.out or Path("reports") / f"{mission.name}-{time.strftime('%Y%m%d-%H%M%S')}"
     if out.exists() and not out.is_dir():
         raise InputError("command line", "--out", str(out), "a folder (this is a file)")
@@ -607,6 +622,7 @@ def _cmd_plan(args: argparse.Namespace) -> int:
                 out,
                 runs=args.evaluate,
                 count=mission.swarm.count,
+                overrides=overrides,
                 plan_seed=args.seed,
                 target=args.target,
                 workers=args.workers,
@@ -664,16 +680,22 @@ def _add_simulate_command(commands) -> None:
         metavar="FILE.gif|FILE.mp4",
         help="also write an animation (.mp4 needs ffmpeg)",
     )
-    sim.add_argument(
+    _add_set_option(sim)
+    sim.add_argument("--workers", type=int, help="planning processes (default: the CPU count)")
+    sim.set_defaults(handler=_cmd_simulate)
+
+
+def _add_set_option(parser: argparse.ArgumentParser) -> None:
+    """The one `--set KEY=VALUE` of every command that reads a mission (plan, simulate, study)."""
+    parser.add_argument(
         "--set",
         dest="overrides",
         action="append",
         default=[],
         metavar="KEY=VALUE",
-        help="override a mission key by its dotted path, e.g. --set swarm.count=20 (repeatable)",
+        help="override a mission key by its dotted path, e.g. --set swarm.count=20 or "
+        "--set hazards.enabled=false (repeatable)",
     )
-    sim.add_argument("--workers", type=int, help="planning processes (default: the CPU count)")
-    sim.set_defaults(handler=_cmd_simulate)
 
 
 def _overrides(pairs: Sequence[str]) -> dict[str, object]:
@@ -902,8 +924,8 @@ def _path_benchmark(args: argparse.Namespace, cm, profiles, start, goal) -> int:
 
 # --- swarm study: Monte Carlo over seeds and parameter grids (swarm/studies) ----------------------------
 def _add_study_command(commands) -> None:
-    """`swarm study MISSION.yaml --runs N [--sweep KEY=VALUES ...] [--seed S] [--workers K]
-    [--backend local|ray] [--address ADDR] [--out DIR]`."""
+    """`swarm study MISSION.yaml --runs N [--sweep KEY=VALUES ...] [--set KEY=VALUE ...] [--seed S]
+    [--workers K] [--backend local|ray] [--address ADDR] [--out DIR]`."""
     st = commands.add_parser(
         "study", help="run a mission many times over seeds and a parameter grid; success with intervals"
     )
@@ -917,6 +939,7 @@ def _add_study_command(commands) -> None:
         help="a mission key and its values: swarm.count=10:60:10 (start:stop:step) or "
         "hazards.surf.wave_height_m=0.5,1,2 (repeatable: the study is their product)",
     )
+    _add_set_option(st)
     st.add_argument("--seed", type=int, default=0, help="study seed: run seeds come from it (default 0)")
     st.add_argument(
         "--workers", type=int, help="processes (local) or CPUs of a local Ray (default: all cores)"
@@ -941,7 +964,7 @@ def _cmd_study(args: argparse.Namespace) -> int:
 
     from swarm.report.study_report import answer, study_rows, write_study_report
     from swarm.studies.study import StudySpec, run_study
-    from swarm.studies.sweep import check_points, parse_sweeps
+    from swarm.studies.sweep import Sweep, check_points, parse_sweeps
 
     if args.runs < 1:
         raise InputError("command line", "--runs", args.runs, "at least 1 run per point")
@@ -957,6 +980,16 @@ def _cmd_study(args: argparse.Namespace) -> int:
     if not args.mission.is_file():
         raise InputError("command line", "MISSION.yaml", str(args.mission), "an existing mission YAML file")
     sweeps = parse_sweeps(args.sweep)
+    swept = {s.key for s in sweeps}
+    fixed = _overrides(args.overrides)
+    if fixed:  # the --set keys first, with the same errors as plan and simulate
+        from swarm.mission.load import load_mission
+
+        load_mission(args.mission, fixed, overrides_source="--set")
+    both = sorted(swept & set(fixed))
+    if both:
+        raise InputError("command line", "--set", both[0], "a key given once: by --set or by --sweep")
+    sweeps = sweeps + [Sweep(k, (v,)) for k, v in fixed.items()]  # a --set is a sweep of one value
     out = args.out or Path("reports") / f"{args.mission.stem}-study"
     if out.exists() and not out.is_dir():
         raise InputError("command line", "--out", str(out), "a folder (this is a file)")

@@ -247,6 +247,9 @@ def test_calibrate_then_validate_round_trip(tmp_path):
     assert result.returncode == 0, result.stderr
     assert "Traceback" not in result.stderr
     assert sorted(p.name for p in tmp_path.iterdir()) == ["c.yaml"]  # no temp file left behind
+    # with no --mode, the mode it starts from is said, and why, in the output and on stderr
+    assert "fitted from terrain mode 'concrete' (the default: no --mode given" in result.stdout
+    assert "starting from terrain mode 'concrete' (the default" in result.stderr
 
     doc = yaml.safe_load(out.read_text())
     (name,) = doc["modes"]

@@ -72,7 +72,7 @@ SURF_TRANSIT_S = 120.0
 
 
 def hazards_enabled(mission: Mission) -> bool:
-    return bool(getattr(mission.hazards, "enabled", True))
+    return mission.hazards.enabled
 
 
 def mine_areas(mission: Mission) -> list[BaseGeometry]:

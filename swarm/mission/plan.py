@@ -853,7 +853,63 @@ def plan_geojson(plan: MissionPlan) -> dict:
                     "properties": {"layer": "relay_link", "task": r.task, "nodes": [int(a), int(b)]},
                 }
             )
-    return _rounded({"type": "FeatureCollection", "name": plan.mission, "features": features})
+    bm = plan.beach_map
+    if getattr(bm, "crs", None) is None:
+        note = {
+            "coordinates": "map metres (x east, y north in the map's own frame), not longitude and "
+            "latitude: the map has no crs",
+            "map": plan.map,
+        }
+        return _rounded(
+            {"type": "FeatureCollection", "name": plan.mission, "properties": note, "features": features}
+        )
+    from swarm.world.crs import to_lonlat
+
+    for f in features:
+        f["geometry"] = _mapped(f["geometry"], lambda xy: to_lonlat(bm, xy))
+    note = {
+        "coordinates": "WGS84 longitude, latitude (RFC 7946)",
+        "map": plan.map,
+        "map_crs": f"EPSG:{bm.crs}",
+    }
+    # degrees to 1e-8 (about a millimetre), the metres' own precision
+    return _degrees(
+        {"type": "FeatureCollection", "name": plan.mission, "properties": note, "features": features}
+    )
+
+
+def _mapped(geometry: dict, transform) -> dict:
+    """A GeoJSON geometry with every position passed through `transform` ((n, 2) -> (n, 2))."""
+
+    def walk(c):
+        arr = np.asarray(c, dtype=np.float64)
+        if arr.ndim == 1:
+            return transform(arr[None])[0].tolist()
+        if arr.ndim == 2 and arr.shape[1] == 2:
+            return transform(arr).tolist()
+        return [walk(x) for x in c]
+
+    if geometry["type"] == "GeometryCollection":
+        return {**geometry, "geometries": [_mapped(g, transform) for g in geometry["geometries"]]}
+    return {**geometry, "coordinates": walk(geometry["coordinates"])}
+
+
+def _degrees(value):
+    """`_rounded`, but positions (lists of two floats in a geometry) to 1e-8 degrees."""
+    if isinstance(value, dict):
+        return {
+            k: (_round_positions(v) if k == "coordinates" and isinstance(v, list) else _degrees(v))
+            for k, v in value.items()
+        }
+    if isinstance(value, list):
+        return [_degrees(v) for v in value]
+    return _rounded(value)
+
+
+def _round_positions(value):
+    if isinstance(value, int | float):
+        return round(float(value), 8)
+    return [_round_positions(v) for v in value]
 
 
 def write_plan(plan: MissionPlan, out_dir: str | Path) -> dict[str, Path]:

@@ -699,6 +699,12 @@ class Comms(_Model):
 class Hazards(_Model):
     """What the simulator draws losses from. Every section and key has a default."""
 
+    enabled: bool = Field(
+        True,
+        description="false turns every hazard off (failure, waves, immobilization, rocks, mines, battery, "
+        "radio, sea and surf time limits), to see what a plan achieves with no losses. The planned "
+        "clearance still expends its markers. Default true.",
+    )
     attrition: Attrition = Field(default_factory=Attrition)
     surf: SurfHazard = Field(default_factory=SurfHazard)
     immobilization: Immobilization = Field(default_factory=Immobilization)

@@ -307,9 +307,13 @@ class HazardModel:
         return rates
 
     def step(self, inp: HazardInputs, rng: np.random.Generator) -> Losses:
-        """Decide which robots are lost this step and why (see the module docstring for the order)."""
+        """Decide which robots are lost this step and why (see the module docstring for the order).
+        With `hazards.enabled` false nobody is (the draws are still made, to keep the stream)."""
         self._check(inp)
         u = rng.random((self.n, N_UNIFORMS))  # fixed shape: see "Determinism" above
+        if not self.hazards.enabled:
+            none = np.full(self.n, NO_LOSS, dtype=np.int64)
+            return Losses(cause=none, mine=np.full(self.n, -1, dtype=np.int64), radio_dropped=none >= 0)
         alive = inp.alive
         on_map = alive & ~inp.at_sea
         cls = np.where(on_map, inp.terrain, 0)  # the terrain is not looked at where at sea

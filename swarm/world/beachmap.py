@@ -50,6 +50,11 @@ class BeachMap:
     terrain: np.ndarray  # int8 (rows, cols), index into terrain_classes
     elevation_m: np.ndarray  # float32 (rows, cols), metres above mean sea level
     regions: Mapping[str, Region] = field(default_factory=dict)
+    #: the coordinate reference the map is placed in (an EPSG code of a projected CRS in metres, its
+    #: axes east and north, e.g. 32610 for UTM zone 10N), or None: a local frame on no real beach
+    crs: int | None = None
+    #: the projected coordinates (easting, northing) of the map point `origin_m` (with a `crs`)
+    crs_origin_m: tuple[float, float] | None = None
 
     def __post_init__(self) -> None:
         if self.terrain.shape != self.elevation_m.shape or self.terrain.ndim != 2:
@@ -154,6 +159,10 @@ class BeachMap:
                 c: float(n) / total for c, n in zip(self.terrain_classes, counts, strict=True)
             },
         }
+        if self.crs is not None:
+            origin = self.crs_origin_m if self.crs_origin_m is not None else self.origin_m
+            out["crs"] = f"EPSG:{self.crs}"
+            out["crs_origin_m"] = [float(v) for v in origin]
         if library is not None:
             blocked = [
                 i for i, c in enumerate(self.terrain_classes) if c in library and not library[c].passable

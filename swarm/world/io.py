@@ -27,9 +27,12 @@ The map file, `maps/NAME.yaml`::
 - Or `regions: NAME.geojson` (relative to the YAML): a GeoJSON FeatureCollection whose features
   carry `name` and `kind` in their properties; the other properties become the region's.
 
-Coordinates everywhere, GeoJSON included, are the map's metres (x east, y north, the same frame
-as `origin_m`), not longitude and latitude: the GeoJSON written here carries no CRS, and a GIS
-reading it should be told it is a local metric frame.
+Coordinates everywhere in the map's files are the map's metres (x east, y north, the same frame as
+`origin_m`). A map may say where it lies on the Earth: `crs:` an EPSG code of a projected CRS in
+metres (e.g. 32610, UTM zone 10N), and `origin_easting_m:`/`origin_northing_m:` the projected
+coordinates of `origin_m` (default: `origin_m` itself, a map drawn in its CRS's own coordinates, as
+an imported DEM is). A plan on such a map writes its GeoJSON in WGS84 longitude and latitude
+(`swarm.world.crs`); the region GeoJSON written here stays in map metres.
 """
 
 from __future__ import annotations
@@ -53,7 +56,17 @@ from swarm.files import atomic_path, parse_yaml, read_text, write_text_atomic
 from swarm.robot.terrain import TerrainLibrary, load_library
 from swarm.world.beachmap import REGION_KINDS, BeachMap, Region
 
-MAP_KEYS = ("name", "cell_m", "origin_m", "terrain_classes", "grid", "regions")
+MAP_KEYS = (
+    "name",
+    "cell_m",
+    "origin_m",
+    "terrain_classes",
+    "grid",
+    "regions",
+    "crs",
+    "origin_easting_m",
+    "origin_northing_m",
+)
 _REQUIRED = ("name", "cell_m", "origin_m", "terrain_classes", "grid")
 _GEOMETRY_KEYS = ("point", "line", "polygon", "geometry")
 _REGION_KEYS = ("kind", *_GEOMETRY_KEYS, "holes", "properties")
@@ -355,6 +368,7 @@ def load_map(path: str | Path, library: TerrainLibrary | None = None) -> BeachMa
             path, "regions", spec, "a mapping of region names to regions, or a .geojson file name"
         )
 
+    crs, crs_origin = _crs_keys(path, data, origin)
     return BeachMap(
         name=name,
         cell_m=float(cell_m),
@@ -363,7 +377,33 @@ def load_map(path: str | Path, library: TerrainLibrary | None = None) -> BeachMa
         terrain=terrain,
         elevation_m=elevation,
         regions=regions,
+        crs=crs,
+        crs_origin_m=crs_origin,
     )
+
+
+def _crs_keys(
+    path: Path, data: Mapping, origin: tuple[float, float]
+) -> tuple[int | None, tuple[float, float] | None]:
+    """The optional `crs` and the projected coordinates of `origin_m` (default: origin_m itself,
+    a map drawn in its CRS's own coordinates, as a DEM is)."""
+    from swarm.world.crs import check_crs
+
+    given = [k for k in ("origin_easting_m", "origin_northing_m") if k in data]
+    if "crs" not in data:
+        if given:
+            raise InputError(path, given[0], data[given[0]], "a 'crs:' EPSG code beside it")
+        return None, None
+    crs = check_crs(path, "crs", data["crs"])
+    if len(given) == 1:
+        other = ({"origin_easting_m", "origin_northing_m"} - set(given)).pop()
+        raise InputError(path, other, "nothing", f"'{other}:' beside '{given[0]}:'")
+    if not given:
+        return crs, origin
+    for key in given:
+        if not _is_number(data[key]) or not math.isfinite(data[key]):
+            raise InputError(path, key, data[key], "a number of metres in the crs")
+    return crs, (float(data["origin_easting_m"]), float(data["origin_northing_m"]))
 
 
 def _plain(value: object) -> object:
@@ -463,6 +503,11 @@ def save_map(beach_map: BeachMap, path: str | Path, *, regions_geojson: str | No
         "terrain_classes": list(beach_map.terrain_classes),
         "grid": npz_path.name,
     }
+    if beach_map.crs is not None:
+        doc["crs"] = int(beach_map.crs)
+        if beach_map.crs_origin_m is not None and tuple(beach_map.crs_origin_m) != tuple(beach_map.origin_m):
+            doc["origin_easting_m"] = float(beach_map.crs_origin_m[0])
+            doc["origin_northing_m"] = float(beach_map.crs_origin_m[1])
     if regions_geojson is not None:
         if Path(regions_geojson).name != regions_geojson or not regions_geojson.endswith(
             (".geojson", ".json")
@@ -640,8 +685,13 @@ def map_from_dem(
 ) -> BeachMap:
     """A `BeachMap` from an ESRI ASCII DEM: elevation from the file, terrain from `classify`
     (default `classify_by_elevation`), no regions. The DEM must be in metres in a projected
-    frame (x east, y north), e.g. UTM; `fill` is the elevation given to NODATA cells."""
+    frame (x east, y north), e.g. UTM; `fill` is the elevation given to NODATA cells. A `.prj`
+    beside it (same stem, ESRI's WKT) gives the map its `crs`, in whose coordinates it stays."""
+    from swarm.world.crs import crs_from_prj
+
     elevation, cell_m, origin = read_esri_ascii(asc_path, fill=fill)
+    prj = Path(asc_path).with_suffix(".prj")
+    crs = crs_from_prj(prj) if prj.is_file() else None
     classes, terrain = classify(elevation)
     classes = tuple(classes)
     library = load_library() if library is None else library
@@ -659,4 +709,6 @@ def map_from_dem(
         terrain=terrain.astype(np.int8),
         elevation_m=elevation,
         regions={},
+        crs=crs,
+        crs_origin_m=None if crs is None else origin,
     )

@@ -263,3 +263,28 @@ def test_marked_mines_are_cleared_together_at_the_set_time(tmp_path) -> None:
     assert sorted(cleared.tolist()) == sorted(ev["mine"] for ev in expended if ev["mine"] >= 0)
     assert not [x for x in log.losses if x["cause"] == "blast"]
     assert log.end_reasons.count("expended") == len(expended)
+
+
+def test_hazards_enabled_false_takes_nobody(tmp_path) -> None:
+    """The harshest hazards, switched off with one key: nobody is lost to any of them, while the
+    same mission with them on loses robots (so the switch, not the mission, is what saves them)."""
+    search = {
+        "type": "search",
+        "area": "search_beach",
+        "sensor": {"model": "inverse_cube", "sweep_width_m": 3.0},
+        "mark": False,
+    }
+    harsh = {
+        "attrition": {"mtbf_h": 0.02},
+        "surf": {"wave_height_m": 1.0, "damage_h50_m": 0.5},
+        "immobilization": {"per_km": 50.0},
+        "rocks": {"damage_per_km": 50.0, "hidden_per_ha": 50.0, "collision_damage_probability": 1.0},
+        "mines": {"count": 40, "trigger_probability": 1.0},
+        "battery": {"capacity_wh": 0.5},
+        "comms": {"dropout_per_h": 60.0, "isolation_limit_s": 1.0},
+    }
+    path = write_mission(tmp_path, swarm={"count": 4}, tasks=[search], hazards=harsh)
+    on = simulate(load_mission(path), seed=3)
+    assert len(on.losses) == 4
+    off = simulate(load_mission(path, {"hazards.enabled": False}), seed=3)
+    assert off.losses == [] and off.end_reasons.count("time_limit") == 4
