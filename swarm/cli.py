@@ -636,16 +636,16 @@ def _cmd_plan(args: argparse.Namespace) -> int:
     for key, value in rows:
         print(f"  {key.ljust(width)}  {value}")
     if evaluation is not None:
-        print(
-            f"  {'in simulation'.ljust(width)}  P(success) {evaluation['success_rate']:.2f} over "
-            f"{evaluation['runs']} runs ({evaluation['wilson_low']:.2f} to {evaluation['wilson_high']:.2f}), "
+        said = [
+            f"P(success) {evaluation['success_rate']:.2f} over {evaluation['runs']} runs "
+            f"({evaluation['wilson_low']:.2f} to {evaluation['wilson_high']:.2f}), "
             f"target {evaluation['target']:g}"
-            + (
-                f"; suggested size {evaluation['suggested_count']}"
-                if evaluation.get("suggested_count")
-                else ""
-            )
-        )
+        ]
+        if evaluation.get("suggested_count"):
+            said.append(f"suggested size {evaluation['suggested_count']}")
+        if evaluation.get("runs_needed"):
+            said.append(f"about {evaluation['runs_needed']} runs would show it")
+        print(f"  {'in simulation'.ljust(width)}  " + "; ".join(said))
     print(f"wrote {', '.join(p.name for p in paths.values())} in {out}")
     return 0
 

@@ -277,8 +277,11 @@ def arrival_png(robots: Sequence[dict]) -> bytes | None:
 
 def evaluation_png(evaluation: dict, criterion: float | None, expected: list[float]) -> bytes:
     """Histograms of the detected fraction and of the robots lost, over the plan's simulated runs."""
-    fig, (left, right) = new_figure(7.2, 2.8, ncols=2)
     det = evaluation.get("detection_values") or []
+    if det:
+        fig, (left, right) = new_figure(7.2, 2.8, ncols=2)
+    else:  # no search: the losses alone
+        fig, right = new_figure(3.8, 2.8)
     if det:
         left.hist(det, bins=min(20, max(5, len(det) // 3)), color=ROLE_COLOURS["search"], alpha=0.8)
         if criterion is not None:
@@ -286,8 +289,8 @@ def evaluation_png(evaluation: dict, criterion: float | None, expected: list[flo
         for e in expected:
             left.axvline(e, color="black", lw=1.2, label=f"plan {e:.1%}")
         left.legend(loc="upper left", fontsize=8)
-    left.set_xlabel("mines detected per run (fraction)")
-    left.set_ylabel("runs")
+        left.set_xlabel("mines detected per run (fraction)")
+        left.set_ylabel("runs")
     lost = evaluation.get("lost_values") or []
     if lost:
         top = max(lost)

@@ -88,7 +88,10 @@ def _losses(d: dict) -> dict | None:
     b = d.get("budget")
     if not b:
         return None
-    return {"hazards": b.get("hazards", True), "by_phase": b["expected_losses"], "total": b["expected_lost"]}
+    # in mission order (plan.json sorts its keys)
+    order = {p: i for i, p in enumerate(("sea", "surf", "beach"))}
+    phases = dict(sorted(b["expected_losses"].items(), key=lambda kv: order.get(kv[0], len(order))))
+    return {"hazards": b.get("hazards", True), "by_phase": phases, "total": b["expected_lost"]}
 
 
 def _relay(d: dict) -> dict | None:
@@ -383,6 +386,8 @@ def evaluation_table(ev: dict) -> list[list[str]]:
                 f"runs ({size['wilson_low']:.3f} to {size['wilson_high']:.3f})",
             ]
         )
+    if ev.get("runs_needed"):
+        rows.append(["runs to show the target", f"about {ev['runs_needed']} at this rate"])
     if ev.get("sizes"):
         suggested = ev.get("suggested_count")
         rows.append(["suggested size", str(suggested) if suggested else "none of the quick sweep's sizes"])
@@ -403,6 +408,17 @@ def plan_report(
     data = plan_data(d, date)
     if evaluation is not None:
         data["evaluation"] = {k: v for k, v in evaluation.items() if not k.endswith("_values")}
+        checks = [
+            *data["verdict"].get("checks", []),
+            {
+                "criterion": f"P(success) in simulation ({evaluation['runs']} runs)",
+                "value": evaluation["success_rate"],
+                "target": evaluation["target"],
+                "unit": "fraction",
+                "met": evaluation["success_rate"] >= evaluation["target"],
+            },
+        ]
+        data["verdict"] = _verdict(checks)
     relay = data["relay"]
     margins = (
         None
@@ -423,16 +439,21 @@ def plan_report(
                 "The plan in simulation (swarm plan --evaluate)", evaluation_table(evaluation), header=False
             )
         )
+        searched = bool(evaluation.get("detection_values"))
         blocks.append(
             Figure(
-                "Detection and losses per simulated run",
+                "Detection and losses per simulated run" if searched else "Losses per simulated run",
                 lambda: figs.evaluation_png(
                     evaluation, criterion, [s["expected_detection"] for s in data["search"]]
                 ),
                 alt="Histograms over the simulated runs of the fraction of mines detected, with the "
-                "criterion and the plan's expected detection, and of the robots lost per run",
+                "criterion and the plan's expected detection, and of the robots lost per run"
+                if searched
+                else "Histogram of the robots lost per simulated run",
                 caption="Left: mines detected per run, the success criterion (dashed) and the plan's "
-                "expected detection (solid). Right: robots lost per run.",
+                "expected detection (solid). Right: robots lost per run."
+                if searched
+                else "Robots lost per simulated run.",
             )
         )
     shows = [

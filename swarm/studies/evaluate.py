@@ -2,9 +2,10 @@
 can put what the simulation delivers next to what the plan promises.
 
 The evaluation is a study of one point (the mission with the plan's overrides and plan seed as
-single-valued sweeps) in ``<plan folder>/evaluation/``, resumable like any study. When the lower
-bound of P(success) misses the target, a quick sweep of the swarm size (1.5x and 2x the count, with
-`QUICK_RUNS` runs each, or N if that is fewer) suggests the size to study properly.
+single-valued sweeps) in ``<plan folder>/evaluation/``, resumable like any study. When the observed
+P(success) misses the target, a quick sweep of the swarm size (1.5x and 2x the count, with
+`QUICK_RUNS` runs each, or N if that is fewer) suggests the size to study properly; when it meets the
+target but its Wilson lower bound does not, the evaluation says how many runs would show it.
 """
 
 from __future__ import annotations
@@ -72,7 +73,10 @@ def evaluate_plan(
         "folder": str(folder / "plan"),
         "suggested_count": None,
     }
-    if point["wilson_low"] < target:
+    if point["wilson_low"] < target <= point["success_rate"]:
+        # the plan looks good enough, the runs are too few to say so at this confidence
+        result["runs_needed"] = stats.runs_for_lower_bound(point["success_rate"], target, confidence)
+    elif point["success_rate"] < target:
         sizes = sorted({max(count + 1, math.ceil(count * f)) for f in QUICK_FACTORS})
         quick = StudySpec(
             str(mission_path),

@@ -269,3 +269,27 @@ def test_twice_the_robots_never_succeed_less(tmp_path) -> None:
     se = math.sqrt((p1 * (1 - p1) + p2 * (1 - p2)) / 24 + 1e-12)
     assert p2 >= p1 - 2.5 * se, (p1, p2)
     assert p2 > 0.5, "the bigger swarm must mostly succeed for the comparison to mean anything"
+
+
+def test_plan_evaluate_puts_the_simulations_beside_the_plan(tmp_path, capsys) -> None:
+    """`swarm plan --evaluate N`: N runs of the plan through the study machinery, P(success) with its
+    Wilson interval in evaluation.json and the report, and, when the target is missed, a quick sweep
+    that suggests a size."""
+    mission = _mission(tmp_path, "evaluated", **{"swarm": {"count": 2}})
+    out = tmp_path / "plan"
+    args = ["plan", str(mission), "--evaluate", "6", "--target", "0.99", "--workers", "1", "--out", str(out)]
+    assert main(args) == 0
+    printed = capsys.readouterr().out
+    ev = yaml.safe_load((out / "evaluation.json").read_text())
+    assert ev["runs"] == 6 and len(ev["seeds"]) == 6
+    low, high = wilson_interval(ev["successes"], 6, 0.95)
+    assert (ev["wilson_low"], ev["wilson_high"]) == pytest.approx((low, high))
+    assert ev["lost"]["mean"] == pytest.approx(sum(ev["lost_values"]) / 6)
+    # a lower bound of at most 0.61 with 6 runs misses 0.99: the quick sweep tried 3 and 4 robots
+    assert [s["count"] for s in ev["sizes"]] == [3, 4]
+    assert "in simulation" in printed and "P(success)" in printed
+    html = (out / "report.html").read_text()
+    assert "The plan in simulation" in html and html.count("data:image/png;base64,") >= 2
+    # the report rebuilt from the folder says the same
+    assert main(["report", str(out), "--format", "md", "-o", str(tmp_path / "again.md")]) == 0
+    assert "The plan in simulation" in (tmp_path / "again.md").read_text()
