@@ -659,13 +659,14 @@ class SwarmEnv(ParallelEnv):
 
     def _flip(self, hits: np.ndarray, height_m: np.ndarray) -> None:
         """Breakers turn robots over: flip_probability for a full breaker, in proportion to the
-        local breaker height below it."""
+        local breaker height below it. With `hazards.enabled` false none does (a rolled robot can
+        overstay the surf crossing); the draws are still made, to keep the stream."""
         if not hits.any():
             return
         surf = self.mission.hazards.surf
         p = surf.flip_probability * np.minimum(1.0, height_m / max(surf.wave_height_m, 1e-9))
         draws = self.rngs["waves"].random(self.n)
-        flips = hits & (draws < p)
+        flips = hits & (draws < p) & self.mission.hazards.enabled
         self.inverted ^= flips
         for i in np.flatnonzero(flips):
             self._event("flip", int(i), inverted=bool(self.inverted[i]))

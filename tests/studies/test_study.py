@@ -28,9 +28,10 @@ from swarm.studies.sweep import parse_sweep, parse_sweeps, points
 from swarm.studies.table import VOLATILE
 
 REPO = Path(__file__).resolve().parents[2]
-#: Hazards that take nobody but random failure.
+#: Hazards that take nobody but random failure: a calm sea where no breaker rolls a robot over or
+#: turns it broadside, so nobody overstays the surf crossing's time limit.
 QUIET = {
-    "surf": {"damage_h50_m": 10.0},
+    "surf": {"damage_h50_m": 10.0, "flip_probability": 0.0, "wave_height_m": 0.3},
     "immobilization": {"per_km": 0.0},
     "rocks": {"damage_per_km": 0.0, "collision_damage_probability": 0.0},
 }
