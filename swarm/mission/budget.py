@@ -245,7 +245,13 @@ class SearchDesign:
         lo = self.min_spacing_m
         if nominal_detection(model, width_m, lo) < want:
             return lo
-        return float(optimize.brentq(lambda s: nominal_detection(model, width_m, s) - want, lo, spacing_m))
+        gap = lambda s: nominal_detection(model, width_m, s) - want  # noqa: E731
+        tighter = spacing_m if gap(spacing_m) >= 0 else float(optimize.brentq(gap, lo, spacing_m))
+        # A definite-range sensor's formula saturates at S = W (it promises everything already), so
+        # it cannot say how much tighter; the shortfall is at edges and blocked ground, and closing
+        # the tracks in by the shortfall's ratio gains there.
+        tighter = max(lo, min(tighter, spacing_m * expected / self.target_detection))
+        return tighter if tighter < spacing_m * (1.0 - 1e-3) else None
 
 
 def search_speed_mps(mission: Mission, cm: CostMap, polygon: BaseGeometry) -> float:

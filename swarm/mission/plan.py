@@ -61,6 +61,9 @@ ENTRY_SLACK_M = 10.0
 #: inflation, and pieces of track shorter than `MIN_TRACK_M` are left out.
 TRACK_MARGIN_M = 1.0
 MIN_TRACK_M = 2.0
+#: At most this many times the planner lays the tracks again at a tighter spacing to meet the
+#: detection target (each time measures the expected detection of the tracks as laid).
+MAX_TIGHTENINGS = 8
 #: Decimal places of every float written to plan.json (1 mm; 1 ms).
 ROUND = 3
 ROLES = ("landing", "search", "relay", "surveillance", "beacon", "spare")
@@ -510,7 +513,9 @@ def _plan_search(
         row_m=row_m,
     )
     spacing: float | None = design.spacing_m
-    while spacing is not None:
+    for _ in range(MAX_TIGHTENINGS):
+        if spacing is None:
+            break
         tracks = clip_tracks(boustrophedon(polygon, spacing), cm, TRACK_MARGIN_M, MIN_TRACK_M)
         runs = [r for r in split_tracks(tracks, design.searchers) if r]
         driven = [LineString(_track_points(r)) for r in runs if len(_track_points(r)) >= 2]

@@ -109,3 +109,22 @@ def test_extra_robots_tighten_the_search_then_cover_losses_then_shorten_it(missi
 def test_unreachable_criterion_is_said(mission) -> None:
     d = _design(mission, 24, reach=0.5)
     assert "no spacing reaches" in d.note and d.spacing_m == pytest.approx(d.min_spacing_m)
+
+
+@pytest.mark.parametrize("spacing_m", [4.4, 3.0, 2.0])
+def test_tightening_a_definite_range_search_always_closes_the_tracks_in(spacing_m: float) -> None:
+    """A cookie-cutter sensor's formula promises everything at S <= W, so it cannot say how much
+    tighter to go when edges and blocked ground keep the tracks short of the target: the planner
+    once asked for the same spacing again, for ever. Every answer must be strictly tighter (by the
+    shortfall's ratio at least), or None at the tightest spacing allowed."""
+    d = budget.SearchDesign(
+        searchers=6, reserves=0, spacing_m=spacing_m, spacing_from="planned", window_s=(0.0, 1000.0),
+        search_time_s=0.0, speed_mps=0.5, target_detection=0.94, mines_expected=6.0,
+        min_spacing_m=1.0, overhead=1.0,
+    )  # fmt: skip
+    seen = [spacing_m]
+    while (nxt := d.tighten("cookie_cutter", 3.0, seen[-1], 0.9)) is not None:
+        assert d.min_spacing_m <= nxt <= max(seen[-1] * 0.9 / 0.94, d.min_spacing_m) + 1e-12
+        seen.append(nxt)
+        assert len(seen) < 100
+    assert seen[-1] == pytest.approx(d.min_spacing_m, rel=1e-2)
