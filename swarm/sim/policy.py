@@ -22,6 +22,7 @@ It drives the environment in command mode. Each step it:
    far to drive), robots within a marked mine's standoff (plus a margin) move to the nearest free
    point clear of every marked mine's standoff, a robot still on its way to mark a mine turns back
    when it cannot get there in time, and everyone else holds until the detonation, then resumes.
+   Before that, a robot with nothing to do waits clear of every found mine's standoff.
 5. At the end of beach operations (with the return to sea enabled), and for any robot whose battery
    falls to the reserve, the command is "return to sea".
 """
@@ -110,6 +111,7 @@ class ScriptedPolicy:
         self._clearance_state = "before"
         self._returning = False
         self._links_seen = -1
+        self._safe_cache: tuple[tuple[bytes, float], tuple[cKDTree, np.ndarray]] | None = None
 
     # the step ------------------------------------------------------------------------------------
     def act(self) -> dict[str, dict]:
@@ -260,6 +262,29 @@ class ScriptedPolicy:
             due = [it for it in marks if self._mark_due(it, free)]
             if due and free.any():
                 self._auction(due, free)
+        self._park(self._idle())
+
+    def _park(self, idle: np.ndarray) -> None:
+        """Idle robots wait clear of the standoff of every mine found so far while a clearance is
+        pending: one left waiting beside a marked mine may not get clear in the clearance lead (a
+        detour around blocked ground), and parking early costs nothing when it has no work."""
+        env = self.env
+        c = env.clearance
+        if c is None or self._clearance_state != "before" or not idle.any():
+            return
+        found = sorted({it.obj for it in self.items if it.kind == "mark"})
+        if not found:
+            return
+        objs = env.objects_m[found]
+        safe_m = c.standoff_m + STANDOFF_MARGIN_M
+        near = np.flatnonzero(idle)
+        near = near[cKDTree(objs).query(env.robot_state[near, :2])[0] < safe_m]
+        if not len(near):
+            return
+        tree, pts = self._safe_points(objs, safe_m)
+        for i in near:
+            xy = env.robot_state[i, :2]
+            env.set_route(int(i), env.router.route(xy, pts[int(tree.query(xy)[1])]))
 
     def _mark_due(self, it: WorkItem, free: np.ndarray) -> bool:
         """A mark is due once nobody is searching any more, or when the nearest robot free to take it
@@ -380,13 +405,17 @@ class ScriptedPolicy:
             env.set_command(int(i), LOITER)
 
     def _safe_points(self, objs: np.ndarray, safe_m: float) -> tuple[cKDTree, np.ndarray]:
-        """Centres of free cells at least `safe_m` from every point of `objs`, in a KD-tree."""
-        cm = self.env.plan.costmap
-        rows, cols = np.nonzero(~cm.blocked)
-        pts = np.column_stack(cm.center_of(rows, cols))
-        far = cKDTree(objs).query(pts)[0] >= safe_m
-        pts = pts[far] if far.any() else pts
-        return cKDTree(pts), pts
+        """Centres of free cells at least `safe_m` from every point of `objs`, in a KD-tree (kept
+        until the objects change: robots park and hold against the same finds many times)."""
+        key = (objs.tobytes(), safe_m)
+        if self._safe_cache is None or self._safe_cache[0] != key:
+            cm = self.env.plan.costmap
+            rows, cols = np.nonzero(~cm.blocked)
+            pts = np.column_stack(cm.center_of(rows, cols))
+            far = cKDTree(objs).query(pts)[0] >= safe_m
+            pts = pts[far] if far.any() else pts
+            self._safe_cache = (key, (cKDTree(pts), pts))
+        return self._safe_cache[1]
 
     def _return(self) -> None:
         env = self.env

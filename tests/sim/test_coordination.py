@@ -316,3 +316,36 @@ def test_hazards_enabled_false_stops_breakers_rolling_robots_over(tmp_path) -> N
     assert [ev for ev in on.events if ev["kind"] == "flip"]
     off = simulate(load_mission(path, {"hazards.enabled": False}), seed=3)
     assert not [ev for ev in off.events if ev["kind"] == "flip"]
+
+
+def test_robots_with_nothing_to_do_wait_clear_of_the_mines_found(tmp_path) -> None:
+    """Between the end of the search and the clearance, a robot with no work waits outside every
+    found mine's standoff (plus the policy's margin) instead of where its track ended: the last
+    retreat before the blast is then short or nothing (mine_clear lost robots whose retreat from a
+    track end beside a marked mine took longer than the clearance lead)."""
+    search = {
+        "type": "search",
+        "area": "search_beach",
+        "sensor": {"model": "cookie_cutter", "sweep_width_m": 4.0},
+        "mark": True,
+        "clearance": {"at_s": 1400.0, "standoff_m": 15.0},
+    }
+    hazards = {**QUIET, "mines": {"count": 6, "trigger_probability": 0.0}}
+    phases = {
+        "sea_transit": {"time_limit_s": 300},
+        "surf_crossing": {"time_limit_s": 300},
+        "beach_operations": {"time_limit_s": 1300},
+        "return_to_sea": {"enabled": False},
+    }
+    path = write_mission(tmp_path, swarm={"count": 8}, tasks=[search], hazards=hazards, phases=phases)
+    env = SwarmEnv(load_mission(path), action_mode="command")
+    policy = ScriptedPolicy(env)
+    env.reset(seed=2)
+    _run(env, policy, env.clearance.at_s - policy.lead_s() - 5.0)
+    assert not (env.routes.in_track() & env.alive).any(), "the search must be over by now"
+    found = sorted({it.obj for it in policy.items if it.kind == "mark"})
+    assert found, "the search must find mines for this test to mean anything"
+    waiting = np.flatnonzero(env.alive & env.on_map & (env.marking < 0))
+    assert len(waiting)
+    gaps = np.hypot(*(env.robot_state[waiting, None, :2] - env.objects_m[found][None]).transpose(2, 0, 1))
+    assert gaps.min() >= env.clearance.standoff_m, gaps.min(axis=1)
