@@ -47,6 +47,10 @@ STANDOFF_MARGIN_M = 10.0
 #: is too far to clear in `clearance_lead_s`.
 RETREAT_TIME_FACTOR = 1.5
 RETREAT_ALLOWANCE_S = 30.0
+#: A retreat goes to the nearest of this many safe points (the nearest first) that the robot can
+#: reach in a straight line, else to whichever of the first `RETREAT_ROUTES_TRIED` routes shortest.
+RETREAT_CANDIDATES = 256
+RETREAT_ROUTES_TRIED = 4
 #: A lost searcher's remaining track is offered in pieces of at most this length (m), so several
 #: idle robots can share it instead of one driving it all.
 TAKEOVER_PIECE_M = 300.0
@@ -281,10 +285,8 @@ class ScriptedPolicy:
         near = near[cKDTree(objs).query(env.robot_state[near, :2])[0] < safe_m]
         if not len(near):
             return
-        tree, pts = self._safe_points(objs, safe_m)
         for i in near:
-            xy = env.robot_state[i, :2]
-            env.set_route(int(i), env.router.route(xy, pts[int(tree.query(xy)[1])]))
+            self._retreat(int(i), objs, safe_m)
 
     def _mark_due(self, it: WorkItem, free: np.ndarray) -> bool:
         """A mark is due once nobody is searching any more, or when the nearest robot free to take it
@@ -393,16 +395,31 @@ class ScriptedPolicy:
                     it.taken_by = -1
             env.set_command(int(i), LOITER)  # drops the mark
         objs = env.objects_m[marked]
-        safe = self._safe_points(objs, safe_m) if len(objs) else None
         for i in np.flatnonzero(env.alive & env.on_map & (env.marking < 0)):
             xy = env.robot_state[i, :2]
             self._held[int(i)] = (env.routes.remaining(i), bool(env.routes.in_track()[i]))
-            if safe is not None and float(np.min(np.hypot(*(objs - xy).T))) < safe_m:
-                tree, pts = safe
-                goal = pts[int(tree.query(xy)[1])]
-                env.set_route(int(i), env.router.route(xy, goal))
+            if len(objs) and float(np.min(np.hypot(*(objs - xy).T))) < safe_m:
+                self._retreat(int(i), objs, safe_m)
                 continue
             env.set_command(int(i), LOITER)
+
+    def _retreat(self, i: int, objs: np.ndarray, safe_m: float) -> None:
+        """Route robot i to the nearest free point `safe_m` clear of every point of `objs` that it
+        can drive to in a straight line; failing that, to the one of the few nearest whose route is
+        shortest. The nearest point as the crow flies can lie behind a dune, and the route around
+        may lead through the mines' standoff instead of away from it."""
+        env = self.env
+        tree, pts = self._safe_points(objs, safe_m)
+        xy = env.robot_state[i, :2]
+        near = np.atleast_1d(tree.query(xy, k=min(RETREAT_CANDIDATES, len(pts)))[1])
+        cand = pts[near]
+        start = np.broadcast_to(env.router.snap(xy), cand.shape)
+        straight = np.flatnonzero(env.plan.costmap.segments_free(start, cand))
+        if len(straight):
+            env.set_route(i, env.router.route(xy, cand[straight[0]]))
+            return
+        routes = [env.router.route(xy, goal) for goal in cand[:RETREAT_ROUTES_TRIED]]
+        env.set_route(i, min(routes, key=lambda r: float(np.hypot(*np.diff(r, axis=0).T).sum())))
 
     def _safe_points(self, objs: np.ndarray, safe_m: float) -> tuple[cKDTree, np.ndarray]:
         """Centres of free cells at least `safe_m` from every point of `objs`, in a KD-tree (kept

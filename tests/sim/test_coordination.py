@@ -349,3 +349,27 @@ def test_robots_with_nothing_to_do_wait_clear_of_the_mines_found(tmp_path) -> No
     assert len(waiting)
     gaps = np.hypot(*(env.robot_state[waiting, None, :2] - env.objects_m[found][None]).transpose(2, 0, 1))
     assert gaps.min() >= env.clearance.standoff_m, gaps.min(axis=1)
+
+
+def test_a_retreat_from_the_standoff_leads_away_from_the_mines() -> None:
+    """On mine_clear's beach a robot at (224, 139) beside six marked mines: the nearest point 60 m
+    clear of them as the crow flies lies behind blocked ground, and the route there led east
+    through the mines' standoff for 90 m (a robot lost in the blast, mine_clear with 48 robots).
+    The retreat must reach a safe point by a route not much longer than the distance it has to
+    get clear, and end clear of every mine."""
+    from pathlib import Path
+
+    mission = load_mission(Path(__file__).resolve().parents[2] / "missions" / "mine_clear.yaml")
+    env = SwarmEnv(mission, action_mode="command")
+    policy = ScriptedPolicy(env)
+    env.reset(seed=1)
+    mines = np.array([[238.14, 113.24], [237.94, 97.95], [297.39, 106.64], [237.31, 125.85],
+                      [360.05, 108.63], [267.02, 130.38]])  # fmt: skip
+    i, safe_m = 0, 60.0
+    env.robot_state[i, :2] = (224.2, 139.0)
+    policy._retreat(i, mines, safe_m)
+    route = env.routes.points[env.routes.start[i] : env.routes.end[i]]
+    length = float(np.hypot(*np.diff(route, axis=0).T).sum())
+    need = safe_m - float(np.min(np.hypot(*(mines - route[0]).T)))
+    assert np.min(np.hypot(*(mines - route[-1]).T)) >= safe_m - 1e-6
+    assert length <= 2.0 * need, (length, need, route[-1])
