@@ -226,10 +226,26 @@ class SearchDesign:
     min_spacing_m: float  # the tightest spacing the planner may choose (time, or the sensor)
     overhead: float  # run time per metre of track over 1 / speed (turns at the track ends)
     note: str = ""
+    robots: int = 0  # searchers + reserves
+    reserves_wanted: int = 0  # the robots the losses are expected to take before the window closes
+    time_kept: float = 1.0  # share of the searchers' time the losses leave
 
     def run_time_s(self, area_m2: float, spacing_m: float) -> float:
         """One searcher's run over its share of `area_m2` at `spacing_m`."""
         return area_m2 / spacing_m / self.searchers / self.speed_mps * self.overhead
+
+    def staff(self, area_m2: float, spacing_m: float) -> None:
+        """Search at `spacing_m`: as many searchers as it needs to finish in the window; of the
+        rest, as many reserves as the losses are expected to take; any robot beyond both searches
+        too (the runs get shorter). A spacing tighter than the searchers can sweep takes reserves
+        back into the search: the criterion comes before the cover for losses."""
+        span = max(self.window_s[1] - self.window_s[0], 1.0)
+        sweep_s = area_m2 * self.overhead / (spacing_m * self.speed_mps)
+        needed = math.ceil(sweep_s / (span * self.time_kept) - 1e-9)
+        self.reserves = max(0, min(self.reserves_wanted, self.robots - max(needed, 1)))
+        self.searchers = self.robots - self.reserves
+        self.spacing_m = float(spacing_m)
+        self.search_time_s = self.run_time_s(area_m2, spacing_m)
 
     def tighten(self, model: str, width_m: float, spacing_m: float, expected: float) -> float | None:
         """A tighter spacing when the tracks laid at `spacing_m` are expected to find `expected`,
@@ -363,15 +379,9 @@ def design_search(
         if spacing > wanted:
             late = f"{robots} searchers cannot sweep at {wanted:.2f} m before {window[1]:.0f} s"
             note = "; ".join(filter(None, [note, f"{late}: spacing {spacing:.2f} m"]))
-    # as many searchers as that spacing needs in the window; of the rest, as many reserves as the
-    # losses are expected to take; any robot beyond both searches too (the runs get shorter)
-    needed = math.ceil(area_m2 * overhead / (spacing * speed_mps * span * kept) - 1e-9)
-    reserves = max(0, min(math.ceil(robots * loss_before_end - 1e-9), robots - max(needed, 1)))
-    searchers = robots - reserves
-    lo = max(MIN_SPACING_FRACTION * w, fits(searchers))
     design = SearchDesign(
-        searchers=searchers,
-        reserves=reserves,
+        searchers=robots,
+        reserves=0,
         spacing_m=float(spacing),
         spacing_from=source,
         window_s=window,
@@ -379,9 +389,12 @@ def design_search(
         speed_mps=speed_mps,
         target_detection=target,
         mines_expected=mines,
-        min_spacing_m=float(lo),
+        min_spacing_m=float(max(MIN_SPACING_FRACTION * w, fits(robots))),
         overhead=overhead,
         note=note,
+        robots=robots,
+        reserves_wanted=math.ceil(robots * loss_before_end - 1e-9),
+        time_kept=kept,
     )
-    design.search_time_s = design.run_time_s(area_m2, design.spacing_m)
+    design.staff(area_m2, spacing)
     return design

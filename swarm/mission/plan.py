@@ -472,7 +472,7 @@ def _plan_search(
     corners = np.asarray(rect.exterior.coords) if rect.geom_type == "Polygon" else np.zeros((2, 2))
     row_m = float(np.hypot(*np.diff(corners, axis=0).T).max())
     dense = drivable_segments(boustrophedon(polygon, budget.MIN_SPACING_FRACTION * width), cm)
-    reach = detection.expected_detection(mine_area, dense, model, width, table)
+    reach = detection.expected_detection(mine_area, dense, model, width, table, ground=cm)
     fractions = _class_fractions(cm, polygon)
     approach = float(shapely.distance(shapely.Point(*launches.mean(axis=0)), polygon))
 
@@ -516,11 +516,14 @@ def _plan_search(
     for _ in range(MAX_TIGHTENINGS):
         if spacing is None:
             break
+        design.staff(polygon.area, spacing)
         tracks = clip_tracks(boustrophedon(polygon, spacing), cm, TRACK_MARGIN_M, MIN_TRACK_M)
         runs = [r for r in split_tracks(tracks, design.searchers) if r]
         driven = [LineString(_track_points(r)) for r in runs if len(_track_points(r)) >= 2]
-        expected = detection.expected_detection(mine_area, drivable_segments(driven, cm), model, width, table)
-        design.spacing_m, spacing = spacing, design.tighten(model, width, spacing, expected)
+        expected = detection.expected_detection(
+            mine_area, drivable_segments(driven, cm), model, width, table, ground=cm
+        )
+        spacing = design.tighten(model, width, spacing, expected)
     spacing = design.spacing_m
     run_s = design.run_time_s(polygon.area, spacing)
     design_out = dataclasses.asdict(design)
@@ -767,7 +770,12 @@ def _budget(mission: Mission, plan: MissionPlan) -> dict:
         model = "random" if s.model == "random_search" else s.model
         if lines and mine_area is not None:
             s.expected_detection = detection.expected_detection(
-                mine_area, drivable_segments(lines, cm), model, s.sweep_width_m, _lateral_range(task.sensor)
+                mine_area,
+                drivable_segments(lines, cm),
+                model,
+                s.sweep_width_m,
+                _lateral_range(task.sensor),
+                ground=cm,
             )
         need = s.design["searchers"] * s.design["search_time_s"]
         capacity = robot_s_by_task.get(s.task, 0.0)

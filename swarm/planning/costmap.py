@@ -217,6 +217,14 @@ class CostMap:
         row, col = self.cell_of(x, y)
         return (x >= xmin) & (x <= xmax) & (y >= ymin) & (y <= ymax) & ~self.blocked[row, col]
 
+    def ground_free(self, x: np.ndarray | float, y: np.ndarray | float) -> np.ndarray:
+        """True where the ground itself can be crossed: inside the map, on a cell no reason makes
+        impassable (the footprint's margin aside). Where mines are laid and searched for."""
+        xmin, ymin, xmax, ymax = self.bounds_m
+        x, y = np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64)
+        row, col = self.cell_of(x, y)
+        return (x >= xmin) & (x <= xmax) & (y >= ymin) & (y <= ymax) & (self.reason[row, col] == FREE)
+
     # cost and clearance along segments ------------------------------------------------------------
     def _traverse(
         self, p0: np.ndarray, p1: np.ndarray

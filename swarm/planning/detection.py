@@ -134,11 +134,15 @@ def _merge_collinear(seg: np.ndarray) -> np.ndarray:
     return np.stack([seg[starts, 0], seg[ends, 1]], axis=1)
 
 
-def sample_points(area: BaseGeometry, power: int = SOBOL_POWER) -> np.ndarray:
-    """Quasi-random points (scrambled Sobol, fixed seed) uniform over `area`."""
+def sample_points(area: BaseGeometry, ground: CostMap | None = None, power: int = SOBOL_POWER) -> np.ndarray:
+    """Quasi-random points (scrambled Sobol, fixed seed) uniform over `area`, and over the ground
+    that can be crossed in it when a cost map is given (where the simulator lays mines)."""
     x0, y0, x1, y1 = area.bounds
     pts = qmc.scale(qmc.Sobol(d=2, scramble=True, seed=0).random_base2(power), (x0, y0), (x1, y1))
-    return pts[shapely.contains_xy(area, pts[:, 0], pts[:, 1])]
+    keep = shapely.contains_xy(area, pts[:, 0], pts[:, 1])
+    if ground is not None:
+        keep &= ground.ground_free(pts[:, 0], pts[:, 1])
+    return pts[keep]
 
 
 def detection_map(
@@ -182,9 +186,11 @@ def expected_detection(
     model: str,
     sweep_width_m: float,
     lateral_range: Callable[[np.ndarray], np.ndarray] | None = None,
+    ground: CostMap | None = None,
 ) -> float:
-    """Expected fraction of mines uniform over `area` detected by sensors along `segments`."""
-    pts = sample_points(area)
+    """Expected fraction of mines uniform over `area` (over its ground that can be crossed, with
+    `ground`) detected by sensors along `segments`."""
+    pts = sample_points(area, ground)
     if not len(pts):
         return 0.0
     return float(detection_map(pts, segments, model, sweep_width_m, lateral_range).mean())

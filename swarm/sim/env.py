@@ -303,7 +303,7 @@ class SwarmEnv(ParallelEnv):
         self.t_s = 0.0
         self.steps = 0
         self.wave_phase_s = float(self.rngs["waves"].uniform(0.0, self.sea.wave_period_s))
-        self.minefield = lay_mines(self.mission, self.rngs["mines"])
+        self.minefield = lay_mines(self.mission, self.rngs["mines"], self.plan.costmap)
         self.hidden_rocks_m = hazards.hidden_rocks_in_cells(
             self.mission.hazards, self._dry_cells, self.beach.cell_m, self.rngs["rocks"]
         )

@@ -3,13 +3,16 @@ happened to each: detected, marked by a loitering robot, set off, cleared."""
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
 import shapely
 from shapely.geometry.base import BaseGeometry
 
+from swarm.mission.budget import mine_areas
 from swarm.mission.schema import Mission
+from swarm.planning import CostMap
 
 #: A robot sets off a mine when the mine lies under its footprint: within this many metres of
 #: its centre (about half the skid4 body width; a pressure fuze under a wheel or the hull).
@@ -44,8 +47,14 @@ class MineField:
         return ~(self.exploded | self.cleared)
 
 
-def sample_in(polygons: list[BaseGeometry], count: int, rng: np.random.Generator) -> np.ndarray:
-    """`count` points uniform over the union of `polygons` (rejection from the bounding box)."""
+def sample_in(
+    polygons: list[BaseGeometry],
+    count: int,
+    rng: np.random.Generator,
+    where: Callable[[np.ndarray, np.ndarray], np.ndarray] | None = None,
+) -> np.ndarray:
+    """`count` points uniform over the union of `polygons`, and where `where(x, y)` is true when it
+    is given (rejection from the bounding box)."""
     if count == 0:
         return np.empty((0, 2))
     area = shapely.union_all(polygons)
@@ -56,23 +65,21 @@ def sample_in(polygons: list[BaseGeometry], count: int, rng: np.random.Generator
     while have < count:
         batch = max(64, 2 * (count - have))
         pts = rng.uniform((x0, y0), (x1, y1), size=(batch, 2))
-        keep = pts[shapely.contains_xy(area, pts[:, 0], pts[:, 1])]
+        inside = shapely.contains_xy(area, pts[:, 0], pts[:, 1])
+        if where is not None:
+            inside &= where(pts[:, 0], pts[:, 1])
+        keep = pts[inside]
         out.append(keep)
         have += len(keep)
     return np.vstack(out)[:count]
 
 
-def mine_areas(mission: Mission) -> list[BaseGeometry]:
-    """The regions mines lie in: hazards.mines.area, or every search task's area."""
-    bm = mission.beach_map
-    spec = mission.hazards.mines
-    names = [spec.area] if spec.area is not None else [t.area for t in mission.tasks_of("search")]
-    return [bm.regions[n].geometry for n in names]
-
-
-def lay_mines(mission: Mission, rng: np.random.Generator) -> MineField:
+def lay_mines(mission: Mission, rng: np.random.Generator, ground: CostMap | None = None) -> MineField:
     """Draw the mine field of one run: `count` mines (or `density_per_ha` x area, a Poisson count)
-    uniform over the mine areas. No mines without a count, a density or an area."""
+    uniform over the mine areas, and with `ground` only where the ground can be crossed: a mine is
+    laid where people and vehicles go, not in a boulder, a driftwood log, a dune face too steep to
+    climb or a keep-out zone the mission excludes from the search (the planner's expected detection
+    averages over the same ground). No mines without a count, a density or an area."""
     spec = mission.hazards.mines
     areas = mine_areas(mission)
     if not areas or (spec.count is None and spec.density_per_ha is None):
@@ -83,4 +90,5 @@ def lay_mines(mission: Mission, rng: np.random.Generator) -> MineField:
         assert spec.density_per_ha is not None
         hectares = shapely.union_all(areas).area / 1e4
         count = int(rng.poisson(spec.density_per_ha * hectares))
-    return MineField(sample_in(areas, count, rng), spec.trigger_probability)
+    where = None if ground is None else ground.ground_free
+    return MineField(sample_in(areas, count, rng, where), spec.trigger_probability)

@@ -292,3 +292,36 @@ def test_same_inputs_and_seed_give_the_same_detections() -> None:
     assert len(a) > 20 and any(d.false_alarm for d in a) and any(not d.false_alarm for d in a)
     assert a == b
     assert a != c
+
+
+def test_mines_lie_only_on_ground_that_can_be_crossed() -> None:
+    """mine_clear's search beach holds driftwood logs, dune faces too steep to climb and a keep-out
+    zone (about 6% of it). Mines are laid only where the ground can be crossed, as many as asked,
+    uniformly over that ground: the share falling in each half of the free ground matches its area."""
+    from pathlib import Path
+
+    import shapely
+
+    from swarm.mission.budget import mine_areas
+    from swarm.mission.load import load_mission
+    from swarm.planning import build_costmap
+    from swarm.planning.costmap import FREE
+    from swarm.sim.mines import lay_mines
+
+    mission = load_mission(
+        Path(__file__).resolve().parents[2] / "missions" / "mine_clear.yaml", {"hazards.mines.count": 4000}
+    )
+    cm = build_costmap(mission.beach_map, mission.robot_params, mission.terrain_library)
+    (area,) = mine_areas(mission)
+    rows, cols = np.nonzero(np.ones(cm.shape, bool))
+    x, y = cm.center_of(rows, cols)
+    inside = shapely.contains_xy(area, x, y)
+    assert (cm.reason[rows[inside], cols[inside]] != FREE).mean() > 0.03, "the test needs blocked ground"
+    mines = lay_mines(mission, np.random.default_rng(3), cm).positions_m
+    assert len(mines) == 4000
+    assert cm.ground_free(mines[:, 0], mines[:, 1]).all()
+    assert shapely.contains_xy(area, mines[:, 0], mines[:, 1]).all()
+    free = inside & (cm.reason[rows, cols] == FREE)
+    west = float(np.mean(x[free] < np.median(x[free])))
+    share = float(np.mean(mines[:, 0] < np.median(x[free])))
+    assert abs(share - west) <= 4 * math.sqrt(west * (1 - west) / len(mines))
