@@ -250,24 +250,30 @@ def test_mines_found_match_the_sensor_model(tmp_path) -> None:
     assert 0.8 * p.sum() <= from_tracks <= p.sum() + 4 * sd, (from_tracks, p.sum())
 
 
-def test_marked_mines_are_cleared_together_at_the_set_time(tmp_path) -> None:
-    """Markers loiter on the mines they found and set them off at clearance.at_s; the policy has
-    moved everyone else out of the standoff by then, so nobody else is caught in a blast."""
+def _clearance_mission(tmp_path, *, at_s: float, standoff_m: float, mines: int, beach_s: float):
+    """8 robots search the small beach with a 4 m cookie-cutter sensor, mark what they find (mines
+    that never go off) and clear them together at `at_s`."""
     search = {
         "type": "search",
         "area": "search_beach",
         "sensor": {"model": "cookie_cutter", "sweep_width_m": 4.0},
         "mark": True,
-        "clearance": {"at_s": 700.0, "standoff_m": 8.0},
+        "clearance": {"at_s": at_s, "standoff_m": standoff_m},
     }
-    hazards = {**QUIET, "mines": {"count": 4, "trigger_probability": 0.0}}
+    hazards = {**QUIET, "mines": {"count": mines, "trigger_probability": 0.0}}
     phases = {
         "sea_transit": {"time_limit_s": 300},
         "surf_crossing": {"time_limit_s": 300},
-        "beach_operations": {"time_limit_s": 600},
+        "beach_operations": {"time_limit_s": beach_s},
         "return_to_sea": {"enabled": False},
     }
-    path = write_mission(tmp_path, swarm={"count": 8}, tasks=[search], hazards=hazards, phases=phases)
+    return write_mission(tmp_path, swarm={"count": 8}, tasks=[search], hazards=hazards, phases=phases)
+
+
+def test_marked_mines_are_cleared_together_at_the_set_time(tmp_path) -> None:
+    """Markers loiter on the mines they found and set them off at clearance.at_s; the policy has
+    moved everyone else out of the standoff by then, so nobody else is caught in a blast."""
+    path = _clearance_mission(tmp_path, at_s=700.0, standoff_m=8.0, mines=4, beach_s=600.0)
     log = simulate(load_mission(path), seed=2)
     (clear,) = [ev for ev in log.events if ev["kind"] == "clearance"]
     assert clear["t_s"] == 700.0
@@ -323,21 +329,7 @@ def test_robots_with_nothing_to_do_wait_clear_of_the_mines_found(tmp_path) -> No
     found mine's standoff (plus the policy's margin) instead of where its track ended: the last
     retreat before the blast is then short or nothing (mine_clear lost robots whose retreat from a
     track end beside a marked mine took longer than the clearance lead)."""
-    search = {
-        "type": "search",
-        "area": "search_beach",
-        "sensor": {"model": "cookie_cutter", "sweep_width_m": 4.0},
-        "mark": True,
-        "clearance": {"at_s": 1400.0, "standoff_m": 15.0},
-    }
-    hazards = {**QUIET, "mines": {"count": 6, "trigger_probability": 0.0}}
-    phases = {
-        "sea_transit": {"time_limit_s": 300},
-        "surf_crossing": {"time_limit_s": 300},
-        "beach_operations": {"time_limit_s": 1300},
-        "return_to_sea": {"enabled": False},
-    }
-    path = write_mission(tmp_path, swarm={"count": 8}, tasks=[search], hazards=hazards, phases=phases)
+    path = _clearance_mission(tmp_path, at_s=1400.0, standoff_m=15.0, mines=6, beach_s=1300.0)
     env = SwarmEnv(load_mission(path), action_mode="command")
     policy = ScriptedPolicy(env)
     env.reset(seed=2)

@@ -1,4 +1,4 @@
-"""The flagship mission's plan holds in simulation when nothing goes wrong: the mines found match
+"""The shipped missions' plans hold in simulation when nothing goes wrong: the mines found match
 the plan's expected detection, and the searchers sweep the ground the plan swept."""
 
 from __future__ import annotations
@@ -16,9 +16,9 @@ from swarm.sim.layout import ROLES
 from swarm.sim.run import simulate
 from swarm.studies.stats import wilson_interval
 
-MINE_CLEAR = Path(__file__).resolve().parents[2] / "missions" / "mine_clear.yaml"
+MISSIONS = Path(__file__).resolve().parents[2] / "missions"
 #: Every hazard off; 200 mines a run so that two runs give a +-3% interval.
-NO_HAZARDS = {"hazards.enabled": False, "hazards.mines.count": 200}
+NO_HAZARDS = {"hazards.enabled": False, "hazards.mines.count": 200, "hazards.mines.density_per_ha": None}
 
 
 def _driven_swath(log, area, width_m: float) -> float:
@@ -34,8 +34,11 @@ def _driven_swath(log, area, width_m: float) -> float:
 
 
 @pytest.mark.slow
-def test_with_no_hazards_the_simulation_finds_what_the_plan_expects() -> None:
-    mission = load_mission(MINE_CLEAR, NO_HAZARDS)
+@pytest.mark.parametrize("name", ["mine_clear", "full_conops"])
+def test_with_no_hazards_the_simulation_finds_what_the_plan_expects(name: str) -> None:
+    """mine_clear: an inverse-cube sensor on tracks the planner spaced; full_conops: a tabulated
+    lateral-range curve on the mission's own spacing, beside landing, relay and surveillance."""
+    mission = load_mission(MISSIONS / f"{name}.yaml", NO_HAZARDS)
     plan = plan_mission(mission, seed=mission.seed, workers=1)
     (search,) = plan.search
     area = mission.beach_map.regions["search_beach"].geometry
