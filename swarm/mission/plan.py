@@ -762,9 +762,12 @@ def _budget(mission: Mission, plan: MissionPlan) -> dict:
     criterion = mission.success.min_detection_fraction
     searches = {}
     for s in plan.search:
-        team = [rp for rp in plan.robots if rp.task == s.task]
+        # every robot's sensor is on ashore: a lander, a spare going to its post, an observer
+        # crossing the mine area find mines too (about 3 of full_conops's 93%)
         lines = [
-            LineString(w) for rp in team if len(w := np.vstack([rp.ground_m.reshape(-1, 2), rp.track_m])) >= 2
+            LineString(w)
+            for rp in plan.robots
+            if len(w := np.vstack([rp.ground_m.reshape(-1, 2), rp.track_m])) >= 2
         ]
         task = next(t for t in mission.tasks_of("search") if t.area == s.area)
         model = "random" if s.model == "random_search" else s.model

@@ -19,10 +19,11 @@ It drives the environment in command mode. Each step it:
    searcher's track (the plan's detection counts on every track being driven). The mark goes to
    a reserve, or to a searcher once its track is done.
 4. Before the synchronized clearance (`clearance_lead_s` ahead, or longer when the standoff is
-   far to drive), robots within a marked mine's standoff (plus a margin) move to the nearest free
-   point clear of every marked mine's standoff, a robot still on its way to mark a mine turns back
-   when it cannot get there in time, and everyone else holds until the detonation, then resumes.
-   Before that, a robot with nothing to do waits clear of every found mine's standoff.
+   far to drive, or when a robot inside a found mine's standoff is far from safe ground), robots
+   within a marked mine's standoff (plus a margin) move to the nearest free point clear of every
+   marked mine's standoff, a robot still on its way to mark a mine turns back when it cannot get
+   there in time, and everyone else holds until the detonation, then resumes. Before that, a
+   robot with nothing to do waits clear of every found mine's standoff.
 5. At the end of beach operations (with the return to sea enabled), and for any robot whose battery
    falls to the reserve, the command is "return to sea".
 """
@@ -34,11 +35,13 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy.sparse import csr_matrix
 from scipy.spatial import cKDTree
 
 from swarm.planning.allocation import auction
 from swarm.sim.env import FOLLOW, LOITER, MARK, RETURN, RETURNING, SEA, SwarmEnv
 from swarm.sim.layout import ROLES
+from swarm.sim.standoff import SafeGround, free_cell_graph
 
 #: Extra distance beyond the clearance standoff that robots retreat to (m).
 STANDOFF_MARGIN_M = 10.0
@@ -47,10 +50,9 @@ STANDOFF_MARGIN_M = 10.0
 #: is too far to clear in `clearance_lead_s`.
 RETREAT_TIME_FACTOR = 1.5
 RETREAT_ALLOWANCE_S = 30.0
-#: A retreat goes to the nearest of this many safe points (the nearest first) that the robot can
-#: reach in a straight line, else to whichever of the first `RETREAT_ROUTES_TRIED` routes shortest.
-RETREAT_CANDIDATES = 256
-RETREAT_ROUTES_TRIED = 4
+#: How long before the clearance the policy starts checking whether a robot inside a found mine's
+#: standoff needs longer than the lead to get clear (s): 900 s is 290 m of retreat at 0.5 m/s.
+HOLD_HORIZON_S = 900.0
 #: A lost searcher's remaining track is offered in pieces of at most this length (m), so several
 #: idle robots can share it instead of one driving it all.
 TAKEOVER_PIECE_M = 300.0
@@ -105,6 +107,7 @@ class ScriptedPolicy:
         self.env = env
         self.realloc_period_s = realloc_period_s
         self.clearance_lead_s = clearance_lead_s
+        self._graph: csr_matrix | None = None  # the cost map's free cells (`standoff`), built once
         self.reset()
 
     def reset(self) -> None:
@@ -115,7 +118,7 @@ class ScriptedPolicy:
         self._clearance_state = "before"
         self._returning = False
         self._links_seen = -1
-        self._safe_cache: tuple[tuple[bytes, float], tuple[cKDTree, np.ndarray]] | None = None
+        self._safe_cache: tuple[tuple[bytes, float], SafeGround] | None = None
 
     # the step ------------------------------------------------------------------------------------
     def act(self) -> dict[str, dict]:
@@ -357,7 +360,7 @@ class ScriptedPolicy:
         c = env.clearance
         if c is None or self._clearance_state == "done":
             return
-        if self._clearance_state == "before" and env.t_s + 1e-9 >= c.at_s - self.lead_s():
+        if self._clearance_state == "before" and self._hold_due():
             self._clearance_state = "holding"
             self._hold(c.at_s - env.t_s, c.standoff_m + STANDOFF_MARGIN_M)
         elif self._clearance_state == "holding" and env.cleared:
@@ -373,6 +376,35 @@ class ScriptedPolicy:
                 else:
                     env.set_route(i, env.robot_state[i, :2][None])
             self._held.clear()
+
+    def _hold_due(self) -> bool:
+        """Time to hold: `lead_s` before the detonation, or earlier when a robot within a found
+        mine's standoff is so far from the nearest safe point that it needs longer to get there
+        (at cruise speed, with the retreat factor and allowance): several marked mines close
+        together can leave a robot on a takeover track 100 m from safe ground."""
+        env = self.env
+        c = env.clearance
+        left = c.at_s - env.t_s
+        if left <= self.lead_s() + 1e-9:
+            return True
+        if left > HOLD_HORIZON_S:
+            return False
+        found = sorted({it.obj for it in self.items if it.kind == "mark"})
+        who = np.flatnonzero(env.alive & env.on_map & (env.marking < 0))
+        if not found or not len(who):
+            return False
+        safe_m = c.standoff_m + STANDOFF_MARGIN_M
+        objs = env.objects_m[found]
+        xy = env.robot_state[who, :2]
+        near = cKDTree(objs).query(xy)[0] < safe_m
+        if not near.any():
+            return False
+        far = self._safe_ground(objs, safe_m).distance_m(np.array([env.router.snap(p) for p in xy[near]]))
+        far = far[np.isfinite(far)]
+        if not len(far):
+            return False
+        far_m = float(far.max())
+        return RETREAT_TIME_FACTOR * far_m / env.limits.cruise_speed_mps + RETREAT_ALLOWANCE_S >= left
 
     def _hold(self, time_left_s: float, safe_m: float) -> None:
         """Everyone but the markers stops; those within `safe_m` of a marked mine move clear first.
@@ -404,34 +436,21 @@ class ScriptedPolicy:
             env.set_command(int(i), LOITER)
 
     def _retreat(self, i: int, objs: np.ndarray, safe_m: float) -> None:
-        """Route robot i to the nearest free point `safe_m` clear of every point of `objs` that it
-        can drive to in a straight line; failing that, to the one of the few nearest whose route is
-        shortest. The nearest point as the crow flies can lie behind a dune, and the route around
-        may lead through the mines' standoff instead of away from it."""
+        """Route robot i over free ground to the nearest point `safe_m` clear of every point of
+        `objs` (`swarm.sim.standoff`)."""
         env = self.env
-        tree, pts = self._safe_points(objs, safe_m)
         xy = env.robot_state[i, :2]
-        near = np.atleast_1d(tree.query(xy, k=min(RETREAT_CANDIDATES, len(pts)))[1])
-        cand = pts[near]
-        start = np.broadcast_to(env.router.snap(xy), cand.shape)
-        straight = np.flatnonzero(env.plan.costmap.segments_free(start, cand))
-        if len(straight):
-            env.set_route(i, env.router.route(xy, cand[straight[0]]))
-            return
-        routes = [env.router.route(xy, goal) for goal in cand[:RETREAT_ROUTES_TRIED]]
-        env.set_route(i, min(routes, key=lambda r: float(np.hypot(*np.diff(r, axis=0).T).sum())))
+        path = self._safe_ground(objs, safe_m).path(env.router.snap(xy))
+        env.set_route(i, np.vstack([xy[None], path]))
 
-    def _safe_points(self, objs: np.ndarray, safe_m: float) -> tuple[cKDTree, np.ndarray]:
-        """Centres of free cells at least `safe_m` from every point of `objs`, in a KD-tree (kept
-        until the objects change: robots park and hold against the same finds many times)."""
+    def _safe_ground(self, objs: np.ndarray, safe_m: float) -> SafeGround:
+        """Distances to safe ground from everywhere (kept until the objects change: robots park
+        and hold against the same finds many times)."""
         key = (objs.tobytes(), safe_m)
         if self._safe_cache is None or self._safe_cache[0] != key:
-            cm = self.env.plan.costmap
-            rows, cols = np.nonzero(~cm.blocked)
-            pts = np.column_stack(cm.center_of(rows, cols))
-            far = cKDTree(objs).query(pts)[0] >= safe_m
-            pts = pts[far] if far.any() else pts
-            self._safe_cache = (key, (cKDTree(pts), pts))
+            if self._graph is None:
+                self._graph = free_cell_graph(self.env.plan.costmap)
+            self._safe_cache = (key, SafeGround(self.env.plan.costmap, self._graph, objs, safe_m))
         return self._safe_cache[1]
 
     def _return(self) -> None:

@@ -13,7 +13,7 @@ from tiny_missions import write_mission
 
 from swarm.mission.load import load_mission
 from swarm.sim.env import BEACH, SwarmEnv
-from swarm.sim.policy import ScriptedPolicy, split_polyline
+from swarm.sim.policy import ScriptedPolicy, WorkItem, split_polyline
 from swarm.sim.run import simulate
 
 #: Hazards that take nobody: for tests that isolate one mechanism.
@@ -343,25 +343,58 @@ def test_robots_with_nothing_to_do_wait_clear_of_the_mines_found(tmp_path) -> No
     assert gaps.min() >= env.clearance.standoff_m, gaps.min(axis=1)
 
 
-def test_a_retreat_from_the_standoff_leads_away_from_the_mines() -> None:
+#: Six mines found on mine_clear's beach, close together (from a run that lost robots in the blast).
+CLUSTER = np.array([[238.14, 113.24], [237.94, 97.95], [297.39, 106.64], [237.31, 125.85],
+                    [360.05, 108.63], [267.02, 130.38]])  # fmt: skip
+
+
+@pytest.fixture(scope="module")
+def mine_clear_env() -> tuple[SwarmEnv, ScriptedPolicy]:
+    from pathlib import Path
+
+    mission = load_mission(Path(__file__).resolve().parents[2] / "missions" / "mine_clear.yaml")
+    env = SwarmEnv(mission, action_mode="command")
+    return env, ScriptedPolicy(env)
+
+
+def test_a_retreat_from_the_standoff_leads_away_from_the_mines(mine_clear_env) -> None:
     """On mine_clear's beach a robot at (224, 139) beside six marked mines: the nearest point 60 m
     clear of them as the crow flies lies behind blocked ground, and the route there led east
     through the mines' standoff for 90 m (a robot lost in the blast, mine_clear with 48 robots).
     The retreat must reach a safe point by a route not much longer than the distance it has to
     get clear, and end clear of every mine."""
-    from pathlib import Path
-
-    mission = load_mission(Path(__file__).resolve().parents[2] / "missions" / "mine_clear.yaml")
-    env = SwarmEnv(mission, action_mode="command")
-    policy = ScriptedPolicy(env)
+    env, policy = mine_clear_env
     env.reset(seed=1)
-    mines = np.array([[238.14, 113.24], [237.94, 97.95], [297.39, 106.64], [237.31, 125.85],
-                      [360.05, 108.63], [267.02, 130.38]])  # fmt: skip
     i, safe_m = 0, 60.0
     env.robot_state[i, :2] = (224.2, 139.0)
-    policy._retreat(i, mines, safe_m)
+    policy._retreat(i, CLUSTER, safe_m)
     route = env.routes.points[env.routes.start[i] : env.routes.end[i]]
     length = float(np.hypot(*np.diff(route, axis=0).T).sum())
-    need = safe_m - float(np.min(np.hypot(*(mines - route[0]).T)))
-    assert np.min(np.hypot(*(mines - route[-1]).T)) >= safe_m - 1e-6
+    need = safe_m - float(np.min(np.hypot(*(CLUSTER - route[0]).T)))
+    assert np.min(np.hypot(*(CLUSTER - route[-1]).T)) >= safe_m - 1e-6
     assert length <= 2.0 * need, (length, need, route[-1])
+
+
+def test_the_hold_starts_early_when_a_robot_is_deep_in_a_cluster_of_finds(mine_clear_env) -> None:
+    """mine_clear's fixed lead (180 s) is enough to drive 60 m clear of one mine, not clear of a
+    cluster: a robot on a takeover track at (249, 117) among six finds drove for 200 s and was
+    still inside the standoff at the blast. It is 72 m from safe ground over free cells, 210 s at
+    0.6 m/s with the retreat factor (1.5) and allowance (30 s): with it there the hold is due 195 s
+    before the clearance; with it 150 m away, not until the fixed lead."""
+    env, policy = mine_clear_env
+    env.reset(seed=1)
+    c = env.clearance
+    for k, xy in enumerate(CLUSTER):
+        policy.items.append(WorkItem("mark", "search", xy.copy(), obj=k))
+    env.objects_m = CLUSTER.copy()
+    env.object_marker = np.full(len(CLUSTER), -1)
+    env.on_map[:] = False
+    env.on_map[0] = True
+    env.t_s = c.at_s - 195.0
+    assert policy.lead_s() < 195.0
+    env.robot_state[0, :2] = (249.0, 117.0)
+    assert policy._hold_due()
+    env.robot_state[0, :2] = (249.0 + 150.0, 117.0 + 60.0)
+    assert not policy._hold_due()
+    env.t_s = c.at_s - policy.lead_s()
+    assert policy._hold_due()

@@ -1,0 +1,51 @@
+"""Getting clear of a blast over drivable ground: the path ends clear of every mine, runs over
+free cells only, is as long as the distance says, and is never shorter than the straight line."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy.spatial import cKDTree
+
+from swarm.mission.load import load_mission
+from swarm.planning import build_costmap
+from swarm.sim.standoff import SafeGround, free_cell_graph
+
+MINE_CLEAR = Path(__file__).resolve().parents[2] / "missions" / "mine_clear.yaml"
+
+
+@pytest.fixture(scope="module")
+def costmap():
+    mission = load_mission(MINE_CLEAR)
+    return build_costmap(mission.beach_map, mission.robot_params, mission.terrain_library)
+
+
+def test_paths_to_safe_ground_are_free_clear_and_as_long_as_the_distance(costmap) -> None:
+    cm = costmap
+    mines = np.array([[238.1, 113.2], [237.9, 98.0], [297.4, 106.6], [237.3, 125.9], [360.1, 108.6]])
+    safe_m = 60.0
+    ground = SafeGround(cm, free_cell_graph(cm), mines, safe_m)
+    rng = np.random.default_rng(0)
+    starts = mines[rng.integers(len(mines), size=200)] + rng.uniform(-50, 50, size=(200, 2))
+    starts = starts[cm.is_free(starts[:, 0], starts[:, 1])]
+    row, col = cm.cell_of(starts[:, 0], starts[:, 1])
+    starts = np.column_stack(cm.center_of(row, col))  # from cell centres: the distance is exact
+    assert len(starts) > 100
+    dist = ground.distance_m(starts)
+    assert np.isfinite(dist).mean() > 0.9
+    for xy, d in zip(starts, dist, strict=True):
+        if not np.isfinite(d):
+            continue
+        path = ground.path(xy)
+        length = float(np.hypot(*np.diff(path, axis=0).T).sum())
+        assert length == pytest.approx(d, abs=1e-6)
+        assert np.min(np.hypot(*(mines - path[-1]).T)) >= safe_m
+        if len(path) > 1:
+            assert cm.segments_free(path[:-1], path[1:]).all()
+        # never shorter than the way out of the standoff as the crow flies
+        gap = safe_m - float(np.min(np.hypot(*(mines - xy).T)))
+        assert length >= gap - cm.cell_m
+    safe = dist == 0
+    assert safe.any() and (cKDTree(mines).query(starts[safe])[0] >= safe_m).all()
