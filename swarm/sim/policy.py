@@ -275,21 +275,22 @@ class ScriptedPolicy:
         """Idle robots wait clear of the standoff of every mine found so far while a clearance is
         pending: one left waiting beside a marked mine may not get clear in the clearance lead (a
         detour around blocked ground), and parking early costs nothing when it has no work."""
-        env = self.env
-        c = env.clearance
-        if c is None or self._clearance_state != "before" or not idle.any():
+        if self.env.clearance is None or self._clearance_state != "before" or not idle.any():
             return
-        found = sorted({it.obj for it in self.items if it.kind == "mark"})
-        if not found:
-            return
-        objs = env.objects_m[found]
-        safe_m = c.standoff_m + STANDOFF_MARGIN_M
-        near = np.flatnonzero(idle)
-        near = near[cKDTree(objs).query(env.robot_state[near, :2])[0] < safe_m]
-        if not len(near):
-            return
+        objs, safe_m, near = self._inside_standoff(np.flatnonzero(idle))
         for i in near:
             self._retreat(int(i), objs, safe_m)
+
+    def _inside_standoff(self, who: np.ndarray) -> tuple[np.ndarray, float, np.ndarray]:
+        """The mines found so far, how far to keep from them (the clearance standoff and the
+        margin), and which of the robots `who` are closer than that to one."""
+        env = self.env
+        found = sorted({it.obj for it in self.items if it.kind == "mark"})
+        objs = env.objects_m[found]
+        safe_m = env.clearance.standoff_m + STANDOFF_MARGIN_M
+        if not found or not len(who):
+            return objs, safe_m, who[:0]
+        return objs, safe_m, who[cKDTree(objs).query(env.robot_state[who, :2])[0] < safe_m]
 
     def _mark_due(self, it: WorkItem, free: np.ndarray) -> bool:
         """A mark is due once nobody is searching any more, or when the nearest robot free to take it
@@ -389,17 +390,11 @@ class ScriptedPolicy:
             return True
         if left > HOLD_HORIZON_S:
             return False
-        found = sorted({it.obj for it in self.items if it.kind == "mark"})
-        who = np.flatnonzero(env.alive & env.on_map & (env.marking < 0))
-        if not found or not len(who):
+        objs, safe_m, near = self._inside_standoff(np.flatnonzero(env.alive & env.on_map & (env.marking < 0)))
+        if not len(near):
             return False
-        safe_m = c.standoff_m + STANDOFF_MARGIN_M
-        objs = env.objects_m[found]
-        xy = env.robot_state[who, :2]
-        near = cKDTree(objs).query(xy)[0] < safe_m
-        if not near.any():
-            return False
-        far = self._safe_ground(objs, safe_m).distance_m(np.array([env.router.snap(p) for p in xy[near]]))
+        starts = np.array([env.router.snap(xy) for xy in env.robot_state[near, :2]])
+        far = self._safe_ground(objs, safe_m).distance_m(starts)
         far = far[np.isfinite(far)]
         if not len(far):
             return False
