@@ -90,6 +90,7 @@ def test_validate_from_ssv_export():
     assert out["duration_s"] == pytest.approx(cols[-1, 0] - cols[0, 0], abs=0.05)
 
 
+@pytest.mark.slow
 def test_validate_compare_scores_the_other_two_models():
     out = validate_json(*run_args("concrete_straight"), "--compare")  # default model: skid
     check_score(out, "skid")
@@ -104,6 +105,7 @@ def test_validate_compare_scores_the_other_two_models():
     assert out["final_error_m"] < 0.1
 
 
+@pytest.mark.slow
 def test_validate_plot_writes_png_and_no_temp_files(tmp_path):
     import matplotlib.image as mpimg
 
@@ -239,6 +241,7 @@ def test_argparse_errors_exit_2_without_traceback():
 # --- calibrate -> validate round trip -----------------------------------------------------------
 
 
+@pytest.mark.slow
 def test_calibrate_then_validate_round_trip(tmp_path):
     from swarm.robot.terrain import load_library
 

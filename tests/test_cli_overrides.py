@@ -15,6 +15,7 @@ LANDING = REPO / "missions" / "landing.yaml"
 COMMANDS = (["plan"], ["simulate"], ["study", "--runs", "2"])
 
 
+@pytest.mark.slow
 def test_plan_takes_set_and_plans_that_many_robots(tmp_path, capsys) -> None:
     out = tmp_path / "plan"
     assert main(["plan", str(LANDING), "--set", "swarm.count=60", "--workers", "1", "--out", str(out)]) == 0

@@ -31,6 +31,7 @@ def maps(tmp_path_factory) -> dict[str, Path]:
     return {"wall": folder / "wall.yaml", "closed": folder / "closed.yaml"}
 
 
+@pytest.mark.slow
 def test_one_path_as_json_same_seed_same_path(maps):
     first = swarm("path", maps["wall"], "--from", "3,4", "--to", "27,4", "--seed", "5", "--json")
     assert first.returncode == 0, first.stderr
@@ -102,6 +103,7 @@ def test_bad_profile_exit_2(maps, tmp_path):
     assert f"{profile}: planner: found 'RRTConect', expected an OMPL planner" in done.stderr
 
 
+@pytest.mark.slow
 def test_benchmark_export(maps, tmp_path):
     quick = tmp_path / "quick.yaml"
     quick.write_text(

@@ -20,6 +20,10 @@ from PIL import Image, ImageStat
 
 from swarm.cli import main
 
+#: End-to-end: real reports, folders and processes (deselect with -m "not slow").
+pytestmark = pytest.mark.slow
+
+
 ROOT = Path(__file__).resolve().parents[2]
 SHOTS = ROOT / "reports" / "screenshots"
 #: name: (CSS px wide, a phone?)

@@ -23,6 +23,10 @@ from swarm.report import build_report
 from swarm.report.load import detect
 from swarm.report.sim_report import format_value
 
+#: End-to-end: real reports, folders and processes (deselect with -m "not slow").
+pytestmark = pytest.mark.slow
+
+
 REPO = Path(__file__).resolve().parents[2]
 RUNS = REPO / "swarm" / "data" / "robot-runs"
 DATE = "2025-01-02"

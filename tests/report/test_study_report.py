@@ -21,6 +21,10 @@ from swarm.sim.hazards import CAUSES
 from swarm.studies.table import CRITERIA, schema
 from swarm.world.io import load_map
 
+#: End-to-end: real reports, folders and processes (deselect with -m "not slow").
+pytestmark = pytest.mark.slow
+
+
 ROOT = Path(__file__).resolve().parents[2]
 KEY = "swarm.count"
 COUNTS = (10, 20, 30)

@@ -29,6 +29,7 @@ def run(folder: Path, name: str):
     return load_encoder_run(ROBOT, folder / f"{name}_encoders.txt", folder / f"{name}_truth.txt")
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(("surface", "mode"), [("concrete", "concrete"), ("hardsand", "wet_hard_sand")])
 def test_shipped_calibration_predicts_held_out_square_spiral_line(surface: str, mode: str) -> None:
     fitted = load_library(DATA / "terrain" / f"skid4-{surface}.yaml")[mode]
@@ -43,6 +44,7 @@ def test_shipped_calibration_predicts_held_out_square_spiral_line(surface: str, 
     assert skid.path_rmse_m < 0.3 * min(thesis_kin.path_rmse_m, thesis_dyn.path_rmse_m)
 
 
+@pytest.mark.slow
 def test_shipped_calibration_is_what_calibrate_makes() -> None:
     """The shipped file is reproducible: calibrating the bundled square gives the same coefficients."""
     shipped = yaml.safe_load((DATA / "terrain" / "skid4-concrete.yaml").read_text())

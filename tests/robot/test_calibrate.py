@@ -39,6 +39,7 @@ def synthetic_run(mode, seconds: float = 12.0) -> Run:
     return Run("synthetic", wheels, truth)
 
 
+@pytest.mark.slow
 def test_skid_calibration_recovers_the_coefficients_that_made_the_data() -> None:
     """Without the prior toward the defaults, the fit finds what generated the data (up to the
     fixed-step integrator's difference from the adaptive one that made it)."""
@@ -69,6 +70,7 @@ def test_kinematic_icr_fit_finds_the_four_wheel_skid() -> None:
     assert result.after[0].path_rmse_m < 0.5 * result.before[0].path_rmse_m
 
 
+@pytest.mark.slow
 def test_written_calibration_reads_back_as_the_same_mode(tmp_path: Path) -> None:
     run = synthetic_run(LIB["wet_hard_sand"], seconds=6.0)
     result = calibrate(

@@ -249,6 +249,7 @@ def test_vectorized_equals_per_robot() -> None:
         )
 
 
+@pytest.mark.slow
 def test_fixed_step_converges_to_the_adaptive_solution() -> None:
     """Smaller steps come closer to the adaptive (LSODA) answer, within millimetres on a 6 s run."""
     model = SkidModel(ROBOT)

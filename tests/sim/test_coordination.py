@@ -81,6 +81,7 @@ def _relay_env(tmp_path, count: int, interval_s: float = 2.0, **hazards: object)
     return SwarmEnv(load_mission(path), action_mode="command")
 
 
+@pytest.mark.slow
 def test_a_lost_relay_breaks_the_link_and_a_spare_repairs_it(tmp_path) -> None:
     """Two relays and a spare launched last (every robot relays, so a spare already ashore could
     bridge the gap by itself): the first relay is lost as soon as both relays are at their posts."""
@@ -117,6 +118,7 @@ def test_nobody_takes_over_what_nobody_heard_about(tmp_path) -> None:
     assert not [ev for ev in env.events if ev["kind"] == "takeover"]
 
 
+@pytest.mark.slow
 def test_a_lost_robots_landing_zone_is_taken_over(tmp_path) -> None:
     path = write_mission(tmp_path, swarm={"count": 4}, hazards=QUIET)
     env = SwarmEnv(load_mission(path), action_mode="command")
@@ -186,6 +188,7 @@ def test_split_polyline_pieces_join_up_and_keep_every_vertex() -> None:
         assert np.min(np.hypot(*(joined - v).T)) < 1e-9
 
 
+@pytest.mark.slow
 def test_mines_found_match_the_sensor_model(tmp_path) -> None:
     """Inverse-cube sensor over a dense field, no marking and no triggering. Koopman's inverse-cube
     law is a detection rate c/r^3 whose straight pass gives p(x) = 1 - exp(-W^2/(4 pi x^2)), so a
@@ -270,6 +273,7 @@ def _clearance_mission(tmp_path, *, at_s: float, standoff_m: float, mines: int, 
     return write_mission(tmp_path, swarm={"count": 8}, tasks=[search], hazards=hazards, phases=phases)
 
 
+@pytest.mark.slow
 def test_marked_mines_are_cleared_together_at_the_set_time(tmp_path) -> None:
     """Markers loiter on the mines they found and set them off at clearance.at_s; the policy has
     moved everyone else out of the standoff by then, so nobody else is caught in a blast."""
@@ -288,6 +292,7 @@ def test_marked_mines_are_cleared_together_at_the_set_time(tmp_path) -> None:
     assert log.end_reasons.count("expended") == len(expended)
 
 
+@pytest.mark.slow
 def test_hazards_enabled_false_takes_nobody(tmp_path) -> None:
     """The harshest hazards, switched off with one key: nobody is lost to any of them, while the
     same mission with them on loses robots (so the switch, not the mission, is what saves them)."""
@@ -313,6 +318,7 @@ def test_hazards_enabled_false_takes_nobody(tmp_path) -> None:
     assert off.losses == [] and off.end_reasons.count("time_limit") == 4
 
 
+@pytest.mark.slow
 def test_hazards_enabled_false_stops_breakers_rolling_robots_over(tmp_path) -> None:
     """A robot rolled over in the surf can overstay the crossing's time limit: a loss to the waves.
     Every breaker rolls a robot over here; with hazards off none does."""
@@ -324,6 +330,7 @@ def test_hazards_enabled_false_stops_breakers_rolling_robots_over(tmp_path) -> N
     assert not [ev for ev in off.events if ev["kind"] == "flip"]
 
 
+@pytest.mark.slow
 def test_robots_with_nothing_to_do_wait_clear_of_the_mines_found(tmp_path) -> None:
     """Between the end of the search and the clearance, a robot with no work waits outside every
     found mine's standoff (plus the policy's margin) instead of where its track ended: the last
@@ -357,6 +364,7 @@ def mine_clear_env() -> tuple[SwarmEnv, ScriptedPolicy]:
     return env, ScriptedPolicy(env)
 
 
+@pytest.mark.slow
 def test_a_retreat_from_the_standoff_leads_away_from_the_mines(mine_clear_env) -> None:
     """On mine_clear's beach a robot at (224, 139) beside six marked mines: the nearest point 60 m
     clear of them as the crow flies lies behind blocked ground, and the route there led east
@@ -375,6 +383,7 @@ def test_a_retreat_from_the_standoff_leads_away_from_the_mines(mine_clear_env) -
     assert length <= 2.0 * need, (length, need, route[-1])
 
 
+@pytest.mark.slow
 def test_the_hold_starts_early_when_a_robot_is_deep_in_a_cluster_of_finds(mine_clear_env) -> None:
     """mine_clear's fixed lead (180 s) is enough to drive 60 m clear of one mine, not clear of a
     cluster: a robot on a takeover track at (249, 117) among six finds drove for 200 s and was

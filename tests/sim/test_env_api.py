@@ -145,6 +145,7 @@ def _assert_same_step(a: tuple, b: tuple, k: int) -> None:
     np.testing.assert_array_equal(state_a, state_b, err_msg=f"step {k}: state()")
 
 
+@pytest.mark.slow
 def test_same_seed_same_episode_over_500_steps(missions: dict[str, Path]) -> None:
     env1 = swarm.sim.parallel_env(mission=missions["hazardous"])
     env2 = swarm.sim.parallel_env(mission=missions["hazardous"])
@@ -173,6 +174,7 @@ def test_same_seed_same_episode_over_500_steps(missions: dict[str, Path]) -> Non
     assert differs > DETERMINISM_STEPS // 2
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("action_mode", ["wheels", "command"])
 def test_reset_with_the_same_seed_replays_the_episode(missions: dict[str, Path], action_mode: str) -> None:
     """A used environment reset with a seed gives the episode a fresh one gives (what Monte Carlo

@@ -40,6 +40,7 @@ def tiny_path(tmp_path_factory) -> Path:
     return path
 
 
+@pytest.mark.slow
 def test_pettingzoo_render_test_passes(tiny_path):
     render_test(lambda render_mode=None: swarm.sim.env(mission=str(tiny_path), render_mode=render_mode))
 
@@ -229,6 +230,7 @@ def test_frame_stride_gives_a_bounded_animation():
     assert frame_stride(1, 0.5) == 10
 
 
+@pytest.mark.slow
 def test_gif_animation_of_a_run(tiny_path, tmp_path):
     out = tmp_path / "run.gif"
     visited: list[int] = []
@@ -282,6 +284,7 @@ def test_animation_path_checks(tmp_path, monkeypatch):
     assert check_animation_path(tmp_path / "a.gif").name == "a.gif"
 
 
+@pytest.mark.slow
 def test_mp4_animation_or_a_clear_error(tiny_path, tmp_path):
     """With ffmpeg an H.264 MP4 (an ISO media file), without it a one-line InputError up front."""
     from matplotlib.animation import FFMpegWriter

@@ -19,6 +19,10 @@ from swarm.report.sim_figures import phase_counts, relay_intervals
 from swarm.report.sim_report import format_value
 from swarm.sim.run import MissionLog
 
+#: End-to-end: real reports, folders and processes (deselect with -m "not slow").
+pytestmark = pytest.mark.slow
+
+
 LOG_FILES = ("trajectories.npz", "events.jsonl", "outcome.json", "report.html", "report.md", "plan.json")
 
 

@@ -84,6 +84,7 @@ def test_run_seeds_come_from_the_study_seed_and_the_runs_place() -> None:
     assert run_seed(7, 2, 3) == run_seed(7, 2, 3) != run_seed(8, 2, 3)
 
 
+@pytest.mark.slow
 def test_the_table_does_not_depend_on_the_worker_count_or_order(reference, tmp_path) -> None:
     spec, table = reference
     assert table.num_rows == 10
@@ -99,6 +100,7 @@ def test_the_table_does_not_depend_on_the_worker_count_or_order(reference, tmp_p
     assert _stable(reordered).equals(_stable(table))
 
 
+@pytest.mark.slow
 def test_a_study_killed_mid_way_resumes_to_the_same_table(reference, tiny, tmp_path) -> None:
     """kill -9 the whole process group once a chunk is on disk; the same command then finishes the
     study with exactly the uninterrupted table (and does not rerun what was stored)."""
@@ -130,6 +132,7 @@ def test_a_study_killed_mid_way_resumes_to_the_same_table(reference, tiny, tmp_p
     assert _stable(pq.read_table(out / "results.parquet")).equals(_stable(expected))
 
 
+@pytest.mark.slow
 def test_the_ray_backend_gives_the_same_table(reference, tmp_path) -> None:
     pytest.importorskip("ray")  # the `ray` extra; CI installs it
     spec, expected = reference
@@ -138,6 +141,7 @@ def test_the_ray_backend_gives_the_same_table(reference, tmp_path) -> None:
     assert _stable(table).equals(_stable(expected))
 
 
+@pytest.mark.slow
 def test_a_resume_with_other_arguments_is_refused(reference, tmp_path) -> None:
     spec, _ = reference
     out = tmp_path / "one"
@@ -146,6 +150,7 @@ def test_a_resume_with_other_arguments_is_refused(reference, tmp_path) -> None:
         run_study(StudySpec(spec.mission_path, 2, spec.sweeps, spec.seed), out, workers=1)
 
 
+@pytest.mark.slow
 def test_the_required_swarm_size_matches_the_k_out_of_n_closed_form(tmp_path) -> None:
     """Robots swim 600 m (1200 s at 0.5 m/s) and need 20 s more to the zone; only random failure
     acts, so each reaches the zone with p = exp(-T / MTBF), and the landing needs k = 2 of them:
@@ -214,6 +219,7 @@ def test_a_bad_sweep_is_one_line_naming_the_key(tiny, tmp_path, sweep, names) ->
     assert not out.exists()  # nothing written
 
 
+@pytest.mark.slow
 def test_a_failed_row_replays_with_swarm_simulate(tmp_path, capsys) -> None:
     """`swarm simulate MISSION --seed <row seed> --set <row's swept values>` reproduces the run of a
     study row: the same outcome and the same losses, cause, phase and time. Immobilization per
@@ -241,6 +247,7 @@ def _losses(folder: Path) -> list[dict]:
     return [e for e in events if e["kind"] == "loss"]
 
 
+@pytest.mark.slow
 def test_twice_the_robots_never_succeed_less(tmp_path) -> None:
     """A search of the small beach under random failures: with twice the robots the plan searches
     with more robots and keeps more in reserve, so P(success) must not drop (one-sided, 2.5 sigma)."""
@@ -272,6 +279,7 @@ def test_twice_the_robots_never_succeed_less(tmp_path) -> None:
     assert p2 > 0.5, "the bigger swarm must mostly succeed for the comparison to mean anything"
 
 
+@pytest.mark.slow
 def test_plan_evaluate_puts_the_simulations_beside_the_plan(tmp_path, capsys) -> None:
     """`swarm plan --evaluate N`: N runs of the plan through the study machinery, P(success) with its
     Wilson interval in evaluation.json and the report, and, when the target is missed, a quick sweep

@@ -58,6 +58,7 @@ def _metres_apart(a: tuple[float, float], b: tuple[float, float]) -> float:
     return math.hypot((a[0] - b[0]) * 111_320 * math.cos(lat), (a[1] - b[1]) * 110_574)
 
 
+@pytest.mark.slow
 def test_a_plan_on_a_placed_map_lands_on_its_beach(tmp_path, capsys) -> None:
     bm = load_map(GENTLE)
     assert bm.crs == 32610 and bm.crs_origin_m is not None  # UTM zone 10N, Santa Cruz Main Beach

@@ -154,6 +154,7 @@ def test_info_table(map_file, capsys):
 # --- show and the figure ---------------------------------------------------------------------------------
 
 
+@pytest.mark.slow
 def test_show_writes_a_png_and_no_temp_files(map_file):
     import matplotlib.image as mpimg
 
@@ -282,6 +283,7 @@ def test_generate_passes_options_and_saves(tmp_path, monkeypatch, capsys):
     assert calls[-1] == {"name": "other"}
 
 
+@pytest.mark.slow
 def test_generate_with_the_real_generator(tmp_path):
     args = ["map", "generate", "--seed", "4", "--length-m", "120", "--width-m", "150", "--cell-m", "2"]
     first = swarm(*args, "-o", tmp_path / "a.yaml")
