@@ -762,8 +762,9 @@ def _budget(mission: Mission, plan: MissionPlan) -> dict:
     criterion = mission.success.min_detection_fraction
     searches = {}
     for s in plan.search:
-        # every robot's sensor is on ashore: a lander, a spare going to its post, an observer
-        # crossing the mine area find mines too (about 3 of full_conops's 93%)
+        # every robot's sensor is on ashore: the planned routes of landers, spares and observers
+        # across the mine area count too (what robots drive off the plan, parking or taking
+        # over, does not: full_conops finds about 3 points more than this in simulation)
         lines = [
             LineString(w)
             for rp in plan.robots

@@ -212,18 +212,21 @@ class CostMap:
 
     def is_free(self, x: np.ndarray | float, y: np.ndarray | float) -> np.ndarray:
         """True where a robot centre may be: inside the map and in an unblocked cell."""
-        xmin, ymin, xmax, ymax = self.bounds_m
-        x, y = np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64)
-        row, col = self.cell_of(x, y)
-        return (x >= xmin) & (x <= xmax) & (y >= ymin) & (y <= ymax) & ~self.blocked[row, col]
+        inside, row, col = self._locate(x, y)
+        return inside & ~self.blocked[row, col]
 
     def ground_free(self, x: np.ndarray | float, y: np.ndarray | float) -> np.ndarray:
         """True where the ground itself can be crossed: inside the map, on a cell no reason makes
         impassable (the footprint's margin aside). Where mines are laid and searched for."""
+        inside, row, col = self._locate(x, y)
+        return inside & (self.reason[row, col] == FREE)
+
+    def _locate(self, x: np.ndarray | float, y: np.ndarray | float) -> tuple[np.ndarray, ...]:
+        """Whether each point lies inside the map, and its (clipped) cell."""
         xmin, ymin, xmax, ymax = self.bounds_m
         x, y = np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64)
         row, col = self.cell_of(x, y)
-        return (x >= xmin) & (x <= xmax) & (y >= ymin) & (y <= ymax) & (self.reason[row, col] == FREE)
+        return (x >= xmin) & (x <= xmax) & (y >= ymin) & (y <= ymax), row, col
 
     # cost and clearance along segments ------------------------------------------------------------
     def _traverse(
