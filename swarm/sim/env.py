@@ -850,13 +850,19 @@ class SwarmEnv(ParallelEnv):
         return wp, track_from
 
     @functools.cached_property
-    def _muster_cells(self) -> tuple[cKDTree, np.ndarray]:
-        """Free cells on dry ground at least `MUSTER_FROM_WATER_M` from any water."""
-        cm = self.plan.costmap
+    def dry_ground(self) -> np.ndarray:
+        """(rows, cols) bool: free cells at least `MUSTER_FROM_WATER_M` from any water, where robots
+        wait out of the surf (a robot waiting in the breakers is rolled over again and again)."""
         water = np.array([self.library[c].is_water for c in self.beach.terrain_classes])
         wet = water[self.beach.terrain.astype(np.intp)]
         far = ndimage.distance_transform_edt(~wet) * self.beach.cell_m >= MUSTER_FROM_WATER_M
-        rows, cols = np.nonzero(far & ~cm.blocked)
+        return far & ~self.plan.costmap.blocked
+
+    @functools.cached_property
+    def _muster_cells(self) -> tuple[cKDTree, np.ndarray]:
+        """Free cells on dry ground (`dry_ground`), or any free cells on a map without."""
+        cm = self.plan.costmap
+        rows, cols = np.nonzero(self.dry_ground)
         if not len(rows):
             rows, cols = np.nonzero(~cm.blocked)
         pts = np.column_stack(cm.center_of(rows, cols))

@@ -21,8 +21,9 @@ It drives the environment in command mode. Each step it:
 4. Before the synchronized clearance (`clearance_lead_s` ahead, or longer when the standoff is
    far to drive, or when a robot inside a found mine's standoff is far from safe ground), robots
    within a marked mine's standoff (plus a margin) move to the nearest free point clear of every
-   marked mine's standoff, a robot still on its way to mark a mine turns back when it cannot get
-   there in time, and everyone else holds until the detonation, then resumes. Before that, a
+   marked mine's standoff (on dry ground, out of the breakers, where there is any), a robot still
+   on its way to mark a mine turns back when it cannot get there in time, and everyone else holds
+   until the detonation, then resumes: the rest of its route, or back to its station. Before that, a
    robot with nothing to do waits clear of every found mine's standoff.
 5. At the end of beach operations (with the return to sea enabled), and for any robot whose battery
    falls to the reserve, the command is "return to sea".
@@ -369,13 +370,10 @@ class ScriptedPolicy:
             for i, (rest, in_track) in self._held.items():
                 if not env.alive[i]:
                     continue
-                if len(rest):
-                    path = env.router.route(env.robot_state[i, :2], rest[0])
-                    more, _ = env.router.stitch(np.vstack([path[-1:], rest[1:]]))
-                    wp = np.vstack([path, more[1:]])
-                    env.set_route(i, wp, track_from=len(path) - 1 if in_track else None)
-                else:
-                    env.set_route(i, env.robot_state[i, :2][None])
+                path = env.router.route(env.robot_state[i, :2], rest[0])
+                more, _ = env.router.stitch(np.vstack([path[-1:], rest[1:]]))
+                wp = np.vstack([path, more[1:]])
+                env.set_route(i, wp, track_from=len(path) - 1 if in_track else None)
             self._held.clear()
 
     def _hold_due(self) -> bool:
@@ -424,7 +422,9 @@ class ScriptedPolicy:
         objs = env.objects_m[marked]
         for i in np.flatnonzero(env.alive & env.on_map & (env.marking < 0)):
             xy = env.robot_state[i, :2]
-            self._held[int(i)] = (env.routes.remaining(i), bool(env.routes.in_track()[i]))
+            rest = env.routes.remaining(i)
+            # a robot on station (route done) comes back to where it stands once the blast is over
+            self._held[int(i)] = (rest if len(rest) else xy[None].copy(), bool(env.routes.in_track()[i]))
             if len(objs) and float(np.min(np.hypot(*(objs - xy).T))) < safe_m:
                 self._retreat(int(i), objs, safe_m)
                 continue
@@ -445,7 +445,8 @@ class ScriptedPolicy:
         if self._safe_cache is None or self._safe_cache[0] != key:
             if self._graph is None:
                 self._graph = free_cell_graph(self.env.plan.costmap)
-            self._safe_cache = (key, SafeGround(self.env.plan.costmap, self._graph, objs, safe_m))
+            ground = SafeGround(self.env.plan.costmap, self._graph, objs, safe_m, dry=self.env.dry_ground)
+            self._safe_cache = (key, ground)
         return self._safe_cache[1]
 
     def _return(self) -> None:

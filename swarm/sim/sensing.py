@@ -34,6 +34,13 @@ pass near the track ends); a parked robot looks no more. (The rate per metre of 
 sweep width at the searcher's own speed, as Koopman's W is defined.) Tabulated curves, the
 cookie cutter and random search draw once per pass, as follows.
 
+Early decision. A mine that lies on a robot's track would be set off before a draw at the end of
+the pass could find it, though any real sensor sees it coming: so a pass is decided (its one
+draw made) as soon as the robot comes within `DECIDE_TRIGGER_RADII` trigger radii of the mine,
+with x the lesser of the closest approach so far and the closest approach of the straight line
+the robot is on. For a straight pass that is its closest approach exactly, so the lateral-range
+curve is unchanged; the robot is then told in time to steer clear. A decided pass draws no more.
+
 A pass also ends, without a draw, when the mine stops being a target (set off, cleared, or found by
 another robot: a found mine is known to all and nobody searches for it again), and when the robot
 stops sensing: a robot that is lost mid-pass cannot report. `update` takes ``alive``: a robot that
@@ -78,6 +85,9 @@ _NEIGHBOUR_BINS = np.array([(i, j) for i in (-1, 0, 1) for j in (-1, 0, 1)], dty
 _BIN_STRIDE = 1 << 31
 #: Up to this many robot-mine pairs, the near pairs come from a dense distance matrix.
 DENSE_PAIRS = 100_000
+#: A pass is decided early when its robot comes within this many trigger radii of the mine (never
+#: beyond the sensor's range): four radii is the 1 m the environment steers found mines clear by.
+DECIDE_TRIGGER_RADII = 4.0
 #: Rejection rounds for a false alarm inside the clutter area before it is dropped.
 FALSE_ALARM_TRIES = 64
 
@@ -158,6 +168,9 @@ class MineSensor:
         self._tree = cKDTree(minefield.positions_m) if self._m else None
         self._keys = np.empty(0, dtype=np.int64)  # robot * m + mine, sorted
         self._xmin = np.empty(0)  # closest approach so far, metres
+        self._decided = np.empty(0, dtype=bool)  # drawn for already (early decision)
+        #: A pass is decided once its robot comes this close to the mine (module docstring).
+        self.decide_m = min(self.range_m, DECIDE_TRIGGER_RADII * minefield.trigger_radius_m)
         self._last_xy = np.full((self.n, 2), np.nan)  # position at the last step while sensing
         self._screen_signature = -1
         self._screen_keys = np.empty(0, dtype=np.int64)
@@ -169,6 +182,7 @@ class MineSensor:
         """Forget passes in progress (a new episode)."""
         self._keys = np.empty(0, dtype=np.int64)
         self._xmin = np.empty(0)
+        self._decided = np.empty(0, dtype=bool)
         self._last_xy[:] = np.nan
         self._screen_signature = -1
 
@@ -308,41 +322,52 @@ class MineSensor:
         # this step's track segments of the sensing robots and the target mines within range of them
         robots = np.flatnonzero(sensing)
         keys = np.empty(0, dtype=np.int64)
-        dist = np.empty(0)
+        dist, now_m, ray_m = np.empty(0), np.empty(0), np.empty(0)
         if len(robots) and np.any(target):
             start, end, r, j = self._segments_near(xy, robots, target)
             d = segment_distance(start[r], end[r], field.positions_m[j])
             keep = d <= self.range_m
-            keys = robots[r[keep]].astype(np.int64) * m + j[keep]
+            r, j = r[keep], j[keep]
+            keys = robots[r].astype(np.int64) * m + j
             dist = d[keep]
+            now_m, ray_m = _ahead(start[r], end[r], field.positions_m[j])
             order = np.argsort(keys)
-            keys, dist = keys[order], dist[order]
+            keys, dist, now_m, ray_m = keys[order], dist[order], now_m[order], ray_m[order]
 
         # merge with the passes in progress
-        old_keys, old_x = self._keys, self._xmin
+        old_keys, old_x, old_decided = self._keys, self._xmin, self._decided
+        decided = np.zeros(len(keys), dtype=bool)
         if len(old_keys) and len(keys):
             where = np.minimum(np.searchsorted(old_keys, keys), len(old_keys) - 1)
             going_on = old_keys[where] == keys
             dist[going_on] = np.minimum(dist[going_on], old_x[where[going_on]])
+            decided[going_on] = old_decided[where[going_on]]
             ended = np.ones(len(old_keys), dtype=bool)
             ended[where[going_on]] = False
         else:
             ended = np.ones(len(old_keys), dtype=bool)
-        self._keys, self._xmin = keys, dist
 
-        # passes that ended: one draw each, if the mine is still a target and the robot can report
+        # passes that ended undecided: one draw each, if the mine is still a target and the robot
+        # can report; then passes decided early (module docstring, "Early decision")
+        ended &= ~old_decided
         end_keys, end_x = old_keys[ended], old_x[ended]
-        robot, mine = end_keys // m, end_keys % m
+        early = ~decided & (now_m <= self.decide_m) & can_report[keys // m]
+        early_x = np.minimum(dist[early], ray_m[early])
+        decided |= early
+        self._keys, self._xmin, self._decided = keys, dist, decided
+        draw_keys = np.concatenate([end_keys, keys[early]])
+        draw_x = np.concatenate([end_x, early_x])
+        robot, mine = draw_keys // m, draw_keys % m
         draws = target[mine] & can_report[robot]
-        robot, mine, end_x = robot[draws], mine[draws], end_x[draws]
+        robot, mine, draw_x = robot[draws], mine[draws], draw_x[draws]
         if not len(robot):
             return []
-        hit = rng.random(len(robot)) < self.curve(end_x)
+        hit = rng.random(len(robot)) < self.curve(draw_x)
         robot, mine = robot[hit], mine[hit]
         found = self._found(robot, mine, t_s)
         if len(self._keys):  # nobody keeps passing a mine that is now known
             keep = ~field.detected[self._keys % m]
-            self._keys, self._xmin = self._keys[keep], self._xmin[keep]
+            self._keys, self._xmin, self._decided = self._keys[keep], self._xmin[keep], self._decided[keep]
         return found
 
     def _false_alarms(
@@ -382,6 +407,21 @@ class MineSensor:
             for i, p in zip(who, pts, strict=True)
             if np.isfinite(p[0])
         ]
+
+
+def _ahead(start: np.ndarray, end: np.ndarray, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """For each segment (start -> end) and point: the distance from the segment's end to the point,
+    and the closest approach of the ray that carries the segment on from its end (that distance
+    where the point lies behind, or the segment has no length)."""
+    gap = points - end
+    now = np.hypot(gap[:, 0], gap[:, 1])
+    heading = end - start
+    length = np.hypot(heading[:, 0], heading[:, 1])
+    moving = length > 1e-12
+    u = heading / np.where(moving, length, 1.0)[:, None]
+    along = np.sum(gap * u, axis=1)
+    across = np.abs(u[:, 0] * gap[:, 1] - u[:, 1] * gap[:, 0])
+    return now, np.where(moving & (along > 0.0), across, now)
 
 
 def _in_disc(rng: np.random.Generator, k: int, radius: float) -> np.ndarray:

@@ -44,14 +44,25 @@ def free_cell_graph(cm: CostMap) -> csr_matrix:
 
 class SafeGround:
     """Distances and paths over free ground to the nearest free cell at least `safe_m` from every
-    point of `objs`."""
+    point of `objs`; with `dry` (a cell mask), to the nearest such cell on dry ground when there is
+    one: the nearest clear cell can lie in the surf, where breakers roll a waiting robot over."""
 
-    def __init__(self, cm: CostMap, graph: csr_matrix, objs: np.ndarray, safe_m: float) -> None:
+    def __init__(
+        self,
+        cm: CostMap,
+        graph: csr_matrix,
+        objs: np.ndarray,
+        safe_m: float,
+        dry: np.ndarray | None = None,
+    ) -> None:
         self.cm = cm
         rows, cols = np.nonzero(~cm.blocked)
         x, y = cm.center_of(rows, cols)
         clear = cKDTree(np.asarray(objs, dtype=np.float64).reshape(-1, 2)).query(np.column_stack([x, y]))[0]
-        sources = (rows * cm.shape[1] + cols)[clear >= safe_m]
+        safe = clear >= safe_m
+        if dry is not None and (safe & dry[rows, cols]).any():
+            safe &= dry[rows, cols]
+        sources = (rows * cm.shape[1] + cols)[safe]
         if not len(sources):
             self.dist = np.full(cm.shape[0] * cm.shape[1], np.inf)
             self.pred = np.full(len(self.dist), -9999)

@@ -407,3 +407,48 @@ def test_the_hold_starts_early_when_a_robot_is_deep_in_a_cluster_of_finds(mine_c
     assert not policy._hold_due()
     env.t_s = c.at_s - policy.lead_s()
     assert policy._hold_due()
+
+
+@pytest.mark.slow
+def test_a_retreat_from_beside_the_surf_waits_on_dry_ground(mine_clear_env) -> None:
+    """A beacon robot on full_conops's beach point (480, 100) retreated from a find 30 m inland to
+    the nearest clear cell, in the breakers at y = 44, and was rolled over again and again until
+    the mission ended. From a mine at (485.5, 99.5) on mine_clear's beach the nearest cell 30 m
+    clear lies seaward, within 5 m of the water: the retreat must end on dry ground instead."""
+    env, policy = mine_clear_env
+    env.reset(seed=1)
+    mine = np.array([[485.5, 99.5]])
+    cm = env.plan.costmap
+    env.robot_state[0, :2] = mine[0]
+    policy._retreat(0, mine, 30.0)
+    end = env.routes.points[env.routes.end[0] - 1]
+    assert np.hypot(*(end - mine[0])) >= 30.0 - 1e-6
+    assert env.dry_ground[cm.cell_of(end[0], end[1])], end
+
+
+@pytest.mark.slow
+def test_a_robot_on_station_goes_back_to_it_after_the_clearance(mine_clear_env) -> None:
+    """A station robot (route done) inside a marked mine's standoff retreats for the blast; when the
+    blast is over it drives back to its station (it used to stay where it had retreated to, and the
+    beacon criterion, held at the end of beach operations, failed)."""
+    env, policy = mine_clear_env
+    env.reset(seed=1)
+    policy.reset()
+    station, mine = np.array([480.0, 110.0]), np.array([485.5, 99.5])
+    env.objects_m = mine[None].copy()
+    env.object_marker = np.array([1])
+    env.object_mine = np.array([-1])
+    env.on_map[:] = False
+    env.on_map[0] = True
+    env.robot_state[0, :2] = station
+    env.set_route(0, station[None], role="beacon")
+    env.routes.advance(env.robot_state[:, :2], env.on_map)
+    assert env.routes.done()[0]
+    policy._hold(300.0, 30.0)
+    retreat = env.routes.points[env.routes.end[0] - 1]
+    assert np.hypot(*(retreat - mine)) >= 30.0 - 1e-6
+    env.robot_state[0, :2] = retreat  # it drove there and waited out the blast
+    env.cleared, policy._clearance_state = True, "holding"
+    policy._clearance()
+    back = env.routes.points[env.routes.end[0] - 1]
+    assert np.hypot(*(back - station)) < 1.0, back

@@ -260,7 +260,7 @@ def test_a_robot_that_is_not_sensing_reports_nothing() -> None:
 def test_a_robot_lost_mid_pass_cannot_report_but_one_that_stops_sensing_does() -> None:
     rng = np.random.default_rng(8)
     on, off = np.ones(1, bool), np.zeros(1, bool)
-    at = np.array([[0.0, 1.0]])  # 1 m abeam of the mine: p = 1 for the cookie cutter
+    at = np.array([[0.0, 1.5]])  # 1.5 m abeam: p = 1 for the cookie cutter, outside early decision
     lost = MineSensor(COOKIE, MineField(np.array([[0.0, 0.0]])), 1)
     assert lost.update(at, on, np.zeros(1), 0.0, rng) == []
     assert lost.update(at, off, np.zeros(1), 1.0, rng) == []  # default: stopped sensing = lost
@@ -273,6 +273,44 @@ def test_a_robot_lost_mid_pass_cannot_report_but_one_that_stops_sensing_does() -
     dead = MineSensor(COOKIE, MineField(np.array([[0.0, 0.0]])), 1)
     dead.update(at, on, np.zeros(1), 0.0, rng)
     assert dead.update(at, off, np.zeros(1), 1.0, rng, alive=np.zeros(1, bool)) == []
+
+
+def test_a_mine_on_the_track_is_found_before_the_robot_reaches_it() -> None:
+    """A robot driving straight at a mine decides its pass (one draw, with the line's closest
+    approach) when it comes within four trigger radii, not after it has driven over the mine:
+    full_conops lost 1.5 robots and mines a run to mines set off before the pass's end found them."""
+    field = MineField(np.array([[0.0, 0.0]]))
+    ms = MineSensor(COOKIE, field, 1)
+    on, rng = np.ones(1, bool), np.random.default_rng(0)
+    found_at = None
+    for k in range(40):
+        x = -8.0 + 0.3 * k
+        if ms.update(np.array([[x, 0.1]]), on, np.full(1, 0.3), float(k), rng):
+            found_at = x
+            break
+    assert found_at is not None
+    assert field.trigger_radius_m < -found_at <= ms.decide_m, found_at
+    assert ms.decide_m == pytest.approx(4.0 * field.trigger_radius_m)
+
+
+def test_early_decision_keeps_the_lateral_range_curve() -> None:
+    """Straight passes at lateral offsets inside the early-decision distance are found with the
+    curve's p(x) of their closest approach, as they were when drawn at the pass's end."""
+    offsets = np.array([0.1, 0.4, 0.7])
+    per_offset = 1000
+    n = per_offset * len(offsets)
+    lanes = np.arange(n) * 20.0  # each robot passes its own mine, far from the others
+    field = MineField(np.column_stack([np.zeros(n), lanes]))
+    ms = MineSensor(TABLE, field, n)
+    lateral = np.repeat(offsets, per_offset)
+    rng = np.random.default_rng(3)
+    for step in range(21):
+        xy = np.column_stack([np.full(n, -5.0 + 0.5 * step), lanes + lateral])
+        ms.update(xy, np.ones(n, bool), np.full(n, 0.5), float(step), rng)
+    p = lateral_range_curve(TABLE)(offsets)
+    for k in range(len(offsets)):
+        hits = int(field.detected[k * per_offset : (k + 1) * per_offset].sum())
+        assert _binomial_ok(hits, per_offset, float(p[k])), (offsets[k], hits, p[k])
 
 
 def test_same_inputs_and_seed_give_the_same_detections() -> None:
