@@ -113,6 +113,14 @@ class MissionScore:
             for st in (*self.surveillance, *self.beacons):
                 st.update(xy_ashore, dt_s)
 
+    def zone_still_open(self, xy: np.ndarray) -> bool:
+        """Whether a landing robot lost at its zone point `xy` leaves work undone: its zone has not
+        yet held its robots (the criterion counts a zone once it has)."""
+        for k, (geom, _) in enumerate(self.zones):
+            if shapely.contains_xy(geom, float(xy[0]), float(xy[1])):
+                return not bool(self.zone_reached[k])
+        return True
+
     # values --------------------------------------------------------------------------------------
     def values(self) -> dict[str, float]:
         """Each applicable criterion's current value."""

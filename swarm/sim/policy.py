@@ -5,7 +5,8 @@ It drives the environment in command mode. Each step it:
 
 1. Reads the new events. A lost robot's work becomes an open *work item*: the rest of its search
    track (in pieces of `TAKEOVER_PIECE_M`), its station (landing, relay, surveillance or beacon
-   point; relays are how the chain heals), or the mine it was marking. A robot that found a mine
+   point; relays are how the chain heals; a landing zone only until it has held its robots, which
+   is all its criterion asks), or the mine it was marking. A robot that found a mine
    makes a *mark* item.
 2. Spreads the news over the radio: an item is known first to the robots in the lost (or finding)
    robot's radio component at the time, then to every component that contains a robot that knows
@@ -61,6 +62,7 @@ TAKEOVER_PIECE_M = 300.0
 #: clearance, so a search still running can use the robot meanwhile (s).
 MARK_SLACK_S = 600.0
 SPARE, SEARCH, RELAY_ROLE = ROLES.index("spare"), ROLES.index("search"), ROLES.index("relay")
+LANDING = ROLES.index("landing")
 STATIONS = tuple(ROLES.index(r) for r in ("landing", "relay", "surveillance", "beacon"))
 
 
@@ -191,6 +193,8 @@ class ScriptedPolicy:
         role = int(env.role[i])
         if role in STATIONS:
             goal = env._route_goal()[i]
+            if role == LANDING and not env.score.zone_still_open(goal):
+                return  # its zone has held its robots: the spares are wanted elsewhere
             self.items.append(WorkItem("route", ROLES[role], goal.copy(), goal[None].copy(),
                                        audience=audience, created_s=t))  # fmt: skip
         elif role == SEARCH:

@@ -135,6 +135,25 @@ def test_a_lost_robots_landing_zone_is_taken_over(tmp_path) -> None:
     assert env.outcome()["criteria"]["landing"]["value"] == 1.0
 
 
+@pytest.mark.slow
+def test_a_landing_zone_that_has_held_its_robots_is_not_taken_over(tmp_path) -> None:
+    """The landing criterion counts a zone once it has held its robots; a spare sent to a zone that
+    already counts is a spare lost to the search and the stations (full_conops sent three)."""
+    path = write_mission(tmp_path, swarm={"count": 4}, hazards=QUIET)
+    env = SwarmEnv(load_mission(path), action_mode="command")
+    policy = ScriptedPolicy(env)
+    env.reset(seed=0)
+    lander = next(r for r in env.plan.robots if r.role == "landing")
+    while env.agents and not env.score.zone_reached.all():
+        policy.update()
+        env.advance({})
+    assert env.score.zone_reached.all()
+    env.lose(lander.id)
+    _run(env, policy, env.time_limit_s + 1)
+    assert not [ev for ev in env.events if ev["kind"] == "takeover" and ev["role"] == "landing"]
+    assert env.outcome()["criteria"]["landing"]["value"] == 1.0
+
+
 def test_a_lost_searchers_track_is_finished_by_a_spare(tmp_path) -> None:
     search = {
         "type": "search",
