@@ -102,6 +102,10 @@ MAX_WHEEL_SPEED_FACTOR = 1.5
 DENSE_NEAREST_PAIRS = 200_000
 #: Spares wait on dry ground at least this far from water (m).
 MUSTER_FROM_WATER_M = 5.0
+#: A robot at the end of its route drives back to it once it has drifted this far (m): robots
+#: creep down the beach's slope and are pushed by the swash, and a station (beacon, observation
+#: point) counts only within `swarm.sim.criteria.STATION_RADIUS_M` (3 m).
+STATION_KEEP_M = 1.0
 #: Seconds between trajectory samples kept for rendering tracks.
 TRACK_SAMPLE_S = 5.0
 
@@ -607,13 +611,16 @@ class SwarmEnv(ParallelEnv):
     def controller_commands(self) -> tuple[np.ndarray, np.ndarray]:
         """Wheel and jet commands for every robot from its command, route and target."""
         xy = self.robot_state[:, :2]
-        route_targets = self.routes.targets(xy)
+        done = self.routes.done()
+        # a robot at the end of its route keeps station there: back when it has drifted off
+        route_targets = np.where(done[:, None], self._route_goal(), self.routes.targets(xy))
+        off_station = np.hypot(*(route_targets - xy).T) > STATION_KEEP_M
         follow = (self.command == FOLLOW) | (self.command == RETURN)
         # a marker follows its route to the mine, then closes in on the mine itself
-        routed = follow | ((self.command == MARK) & ~self.routes.done())
+        routed = follow | ((self.command == MARK) & ~done)
         target = np.where(routed[:, None], route_targets, self.target_m)
         hold = (self.command == LOITER) | (self.command == RELAY)
-        moving = self.alive & self.on_map & ~hold & ~(follow & self.routes.done())
+        moving = self.alive & self.on_map & ~hold & ~(follow & done & ~off_station)
         speed = self.limits.cruise_speed_mps
         wheels, jet, _ = drive_toward(
             self.robot_state, target, speed, self.submersion, self.inverted, self.limits, moving

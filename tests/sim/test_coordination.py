@@ -471,3 +471,26 @@ def test_a_robot_on_station_goes_back_to_it_after_the_clearance(mine_clear_env) 
     policy._clearance()
     back = env.routes.points[env.routes.end[0] - 1]
     assert np.hypot(*(back - station)) < 1.0, back
+
+
+@pytest.mark.slow
+def test_a_robot_keeps_station_at_the_end_of_its_route(mine_clear_env) -> None:
+    """A robot whose route is done stands still while it is within 1 m of the route's end, and
+    drives back once it has been pushed further: on full_conops both beacon robots crept 3 m down
+    the slope in two hours and the beacon criterion (held within 3 m at the end) failed."""
+    env, _ = mine_clear_env
+    env.reset(seed=1)
+    station = np.array([480.0, 110.0])
+    env.on_map[:] = False
+    env.on_map[0] = True
+    env.robot_state[0, :2] = station
+    env.robot_state[0, 2] = 0.0
+    env.set_route(0, station[None], role="beacon")
+    env.routes.advance(env.robot_state[:, :2], env.on_map)
+    assert env.routes.done()[0]
+    env.robot_state[0, :2] = station + (0.0, -0.8)
+    wheels, _ = env.controller_commands()
+    assert np.all(wheels[0] == 0.0)
+    env.robot_state[0, :2] = station + (-2.0, 0.0)  # 2 m behind it, facing it
+    wheels, _ = env.controller_commands()
+    assert wheels[0, 0] > 0 and wheels[0, 1] > 0
