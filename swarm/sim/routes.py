@@ -2,13 +2,12 @@
 
 Routes are ragged (a searcher's boustrophedon run has hundreds of points, a relay's a handful), so
 they live in one growing flat array with a [start, end) slice and a cursor per robot; advancing
-every cursor is a few vectorized passes. Replacing a robot's route appends the new points; the
-old ones stay (routes are small next to the trajectories).
+every cursor is a few vectorized passes. Replacing a robot's route appends the new points (to
+an array whose capacity doubles, so appending is amortized constant time); the old ones stay
+(routes are small next to the trajectories).
 """
 
 from __future__ import annotations
-
-import itertools
 
 import numpy as np
 
@@ -30,7 +29,9 @@ class Routes:
     """Waypoint lists for n robots and how far along each robot is."""
 
     def __init__(self, n: int) -> None:
-        self.points = np.empty((0, 2))
+        self._store = np.empty((256, 2))  # capacity doubles as routes are appended
+        self._used = 0
+        self.points = self._store[:0]
         self.start = np.zeros(n, dtype=np.intp)
         self.end = np.zeros(n, dtype=np.intp)
         self.cursor = np.zeros(n, dtype=np.intp)
@@ -39,8 +40,14 @@ class Routes:
     def set(self, i: int, waypoints: np.ndarray, sensing_from: int | None = None) -> None:
         """Give robot i a new route (k, 2); `sensing_from`: index of the first search-track point."""
         pts = np.asarray(waypoints, dtype=np.float64).reshape(-1, 2)
-        base = len(self.points)
-        self.points = np.vstack([self.points, pts])
+        base = self._used
+        if base + len(pts) > len(self._store):
+            grown = np.empty((max(2 * len(self._store), base + len(pts)), 2))
+            grown[:base] = self._store[:base]
+            self._store = grown
+        self._store[base : base + len(pts)] = pts
+        self._used = base + len(pts)
+        self.points = self._store[: self._used]
         self.start[i], self.end[i], self.cursor[i] = base, base + len(pts), base
         self.sensing_from[i] = base + (len(pts) if sensing_from is None else sensing_from)
 
@@ -137,25 +144,36 @@ class Routes:
 def clear_of(points: np.ndarray, avoid: np.ndarray, radius_m: float) -> tuple[np.ndarray, np.ndarray]:
     """`points` (a polyline) with a side-step around every point of `avoid` that a leg passes within
     `radius_m` of: two waypoints abreast of it, `radius_m` out on the leg's far side from it. Returns
-    the new polyline and, for each original point, its index in it."""
+    the new polyline and, for each original point, its index in it. Every leg is screened against
+    every point at once; only the legs with something in the way are looped over."""
     pts = np.asarray(points, dtype=np.float64).reshape(-1, 2)
     avoid = np.asarray(avoid, dtype=np.float64).reshape(-1, 2)
     if len(pts) < 2 or not len(avoid):
         return pts.copy(), np.arange(len(pts))
-    out, where = [pts[:1]], [0]
-    for a, b in itertools.pairwise(pts):
-        leg = b - a
-        length = float(np.hypot(*leg))
-        if length > 1e-9:
-            u = leg / length
-            n = np.array([-u[1], u[0]])
-            rel = avoid - a
-            along, across = rel @ u, rel @ n
-            near = (np.abs(across) < radius_m) & (along > -radius_m) & (along < length + radius_m)
-            for j in np.flatnonzero(near)[np.argsort(along[near])]:
-                side = across[j] - (radius_m if across[j] >= 0 else -radius_m)
-                s0, s1 = np.clip([along[j] - radius_m, along[j] + radius_m], 0.0, length)
-                out.append(np.array([a + u * s0 + n * side, a + u * s1 + n * side]))
-        out.append(b[None])
-        where.append(sum(len(o) for o in out) - 1)
-    return np.vstack(out), np.array(where)
+    a = pts[:-1]
+    leg = pts[1:] - a
+    length = np.hypot(leg[:, 0], leg[:, 1])
+    u = leg / np.where(length > 1e-9, length, 1.0)[:, None]
+    rel = avoid[None, :, :] - a[:, None, :]  # (legs, points, 2)
+    along = rel[..., 0] * u[:, None, 0] + rel[..., 1] * u[:, None, 1]
+    across = rel[..., 1] * u[:, None, 0] - rel[..., 0] * u[:, None, 1]
+    near = (length[:, None] > 1e-9) & (np.abs(across) < radius_m)
+    near &= (along > -radius_m) & (along < length[:, None] + radius_m)
+    per_leg = near.sum(axis=1)
+    if not per_leg.any():
+        return pts.copy(), np.arange(len(pts))
+    where = np.concatenate([[0], np.cumsum(1 + 2 * per_leg)])
+    out = np.empty((where[-1] + 1, 2))
+    out[where] = pts
+    for k in np.flatnonzero(per_leg):
+        js = np.flatnonzero(near[k])
+        js = js[np.argsort(along[k, js], kind="stable")]
+        side = across[k, js] - np.where(across[k, js] >= 0, radius_m, -radius_m)
+        s0 = np.clip(along[k, js] - radius_m, 0.0, length[k])
+        s1 = np.clip(along[k, js] + radius_m, 0.0, length[k])
+        normal = np.array([-u[k, 1], u[k, 0]])
+        steps = np.empty((len(js), 2, 2))
+        steps[:, 0] = a[k] + s0[:, None] * u[k] + side[:, None] * normal
+        steps[:, 1] = a[k] + s1[:, None] * u[k] + side[:, None] * normal
+        out[where[k] + 1 : where[k + 1]] = steps.reshape(-1, 2)
+    return out, where
