@@ -22,9 +22,10 @@ Causes combine as independent competing risks: P(lost) = 1 - prod(1 - p_cause).
 Search design (`design_search`). The search must be over before its window closes: the synchronized
 clearance less the time to clear the standoff and to bring markers onto the mines found, or the end
 of beach operations. With `track_spacing_m` unset the spacing is the widest whose expected
-detection gives the success criterion with `DESIGN_CONFIDENCE` (the detected fraction of N mines is
-binomial), unless the robots cannot drive that much track in the window (less the searcher time
-the losses are expected to cost), in which case it is the tightest they can. As many robots search
+detection gives the success criterion with the task's `detection_confidence` (0.95 by default; the
+detected fraction of N mines is binomial), unless the robots cannot drive that much track in the
+window (less the searcher time the losses are expected to cost), in which case it is the tightest
+they can. As many robots search
 as that spacing needs; of the others, as many as the losses are expected to take wait as reserves
 inside the search area (they take over a lost searcher's track and mark the mines the searchers
 report: marking never takes a searcher off its track); any robot beyond both searches too. More
@@ -44,12 +45,13 @@ from scipy.special import erf
 from scipy.stats import binom
 from shapely.geometry.base import BaseGeometry
 
-from swarm.mission.schema import Mission
+from swarm.mission.schema import DETECTION_CONFIDENCE, Mission
 from swarm.planning import CostMap
 from swarm.world.coastal import surf_zone_mask
 
-#: The detection criterion is designed to hold with this probability over the mine field's draw.
-DESIGN_CONFIDENCE = 0.95
+#: The detection criterion is designed to hold with this probability over the mine field's draw,
+#: unless the search task says otherwise (`detection_confidence`).
+DESIGN_CONFIDENCE = DETECTION_CONFIDENCE
 #: The tightest spacing the planner chooses, as a fraction of the sweep width.
 MIN_SPACING_FRACTION = 0.25
 #: Time per track end: two pivots of 90 degrees at the controller's turn rate (s).
@@ -221,7 +223,7 @@ class SearchDesign:
     window_s: tuple[float, float]  # the search may run from, to (mission time)
     search_time_s: float  # one searcher's run, at the planning speed
     speed_mps: float
-    target_detection: float  # what the design aims for: the criterion with DESIGN_CONFIDENCE
+    target_detection: float  # what the design aims for: the criterion with the task's confidence
     mines_expected: float
     min_spacing_m: float  # the tightest spacing the planner may choose (time, or the sensor)
     overhead: float  # run time per metre of track over 1 / speed (turns at the track ends)
@@ -247,11 +249,20 @@ class SearchDesign:
         self.spacing_m = float(spacing_m)
         self.search_time_s = self.run_time_s(area_m2, spacing_m)
 
-    def tighten(self, model: str, width_m: float, spacing_m: float, expected: float) -> float | None:
+    def tighten(
+        self,
+        model: str,
+        width_m: float,
+        spacing_m: float,
+        expected: float,
+        before: tuple[float, float] | None = None,
+    ) -> float | None:
         """A tighter spacing when the tracks laid at `spacing_m` are expected to find `expected`,
         short of the target: the ground and the edges cost expected / nominal of Koopman's formula,
-        so ask the formula for that much more. None when the spacing is the mission's, already the
-        tightest allowed, or the target is met."""
+        so ask the formula for that much more. With `before` (the previous layout's spacing and
+        expected detection) the secant through both layouts may ask for more still: near the
+        target each ratio step gains less and less (full_conops needed a dozen). None when the
+        spacing is the mission's, already the tightest allowed, or the target is met."""
         if self.spacing_from != "planned" or expected >= self.target_detection - 1e-3:
             return None
         if spacing_m <= self.min_spacing_m * 1.001:
@@ -267,6 +278,9 @@ class SearchDesign:
         # it cannot say how much tighter; the shortfall is at edges and blocked ground, and closing
         # the tracks in by the shortfall's ratio gains there.
         tighter = max(lo, min(tighter, spacing_m * expected / self.target_detection))
+        if before is not None and before[0] > spacing_m and before[1] < expected:
+            slope = (expected - before[1]) / (before[0] - spacing_m)  # detection per metre tighter
+            tighter = max(lo, min(tighter, spacing_m - (self.target_detection - expected) / slope))
         return tighter if tighter < spacing_m * (1.0 - 1e-3) else None
 
 
@@ -350,7 +364,7 @@ def design_search(
     window = search_window_s(mission, task, start_s)
     span = max(window[1] - window[0], 1.0)
     mines = expected_mine_count(mission)
-    target = detection_needed(mission.success.min_detection_fraction, mines)
+    target = detection_needed(mission.success.min_detection_fraction, mines, task.detection_confidence)
     model = "random" if task.sensor.model == "random_search" else task.sensor.model
     w = task.sensor.width_m
     overhead = 1.0 + TURN_S * speed_mps / max(row_m, 1.0)

@@ -513,6 +513,7 @@ def _plan_search(
         row_m=row_m,
     )
     spacing: float | None = design.spacing_m
+    before: tuple[float, float] | None = None
     for _ in range(MAX_TIGHTENINGS):
         if spacing is None:
             break
@@ -523,7 +524,9 @@ def _plan_search(
         expected = detection.expected_detection(
             mine_area, drivable_segments(driven, cm), model, width, table, ground=cm
         )
-        spacing = design.tighten(model, width, spacing, expected)
+        laid = (spacing, expected)
+        spacing = design.tighten(model, width, spacing, expected, before)
+        before = laid
     spacing = design.spacing_m
     run_s = design.run_time_s(polygon.area, spacing)
     design_out = dataclasses.asdict(design)

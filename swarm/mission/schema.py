@@ -385,6 +385,10 @@ class Clearance(_Model):
     )
 
 
+#: The search's default design confidence (`SearchTask.detection_confidence`).
+DETECTION_CONFIDENCE = 0.95
+
+
 class SearchTask(_Task):
     """Mine and obstacle search over an area, marking what is found: a robot loiters on each mine."""
 
@@ -394,7 +398,16 @@ class SearchTask(_Task):
     track_spacing_m: float | None = Field(
         None,
         gt=0.0,
-        description="Distance between parallel search tracks, metres. Default: the sweep width.",
+        description="Distance between parallel search tracks, metres. Default: the planner's, the widest "
+        "whose tracks meet the detection criterion with detection_confidence.",
+    )
+    detection_confidence: float = Field(
+        DETECTION_CONFIDENCE,
+        gt=0.5,
+        lt=1.0,
+        description="Probability, over the mine field's draw, with which the planned tracks are to meet "
+        "success.min_detection_fraction. Default 0.95. A mission with several other criteria that can "
+        "fail asks more of the search, so that P(every criterion) still reaches its target.",
     )
     robots: int | None = Field(
         None,

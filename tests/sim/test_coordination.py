@@ -488,9 +488,9 @@ def test_a_robot_keeps_station_at_the_end_of_its_route(mine_clear_env) -> None:
     env.set_route(0, station[None], role="beacon")
     env.routes.advance(env.robot_state[:, :2], env.on_map)
     assert env.routes.done()[0]
-    env.robot_state[0, :2] = station + (0.0, -0.8)
+    env.robot_state[0, :2] = station + np.array([0.0, -0.8])
     wheels, _ = env.controller_commands()
     assert np.all(wheels[0] == 0.0)
-    env.robot_state[0, :2] = station + (-2.0, 0.0)  # 2 m behind it, facing it
+    env.robot_state[0, :2] = station + np.array([-2.0, 0.0])  # 2 m behind it, facing it
     wheels, _ = env.controller_commands()
     assert wheels[0, 0] > 0 and wheels[0, 1] > 0
