@@ -232,11 +232,13 @@ class ScriptedPolicy:
         self._links_seen = env.links_version
         comp = env.links.component[: env.n]
         alive = env.alive
+        reached = np.zeros(int(comp.max(initial=-1)) + 2, bool)  # per component (+1: -1 is none)
         for it in self.items:
             if it.taken_by >= 0 or not it.audience.any():
                 continue
-            known = np.unique(comp[it.audience & alive])
-            it.audience = (it.audience | np.isin(comp, known)) & alive
+            reached[:] = False
+            reached[comp[it.audience & alive] + 1] = True
+            it.audience = (it.audience | reached[comp + 1]) & alive
 
     # who is free ----------------------------------------------------------------------------------------
     def _idle(self) -> np.ndarray:
