@@ -180,8 +180,8 @@ def breakdown(n: int, steps: int, seed: int, profile: bool) -> str:
     timers.wrap(env.physics, "step", "physics (skid model, terrain, waves)")
     for name, label in ADVANCE_PARTS:
         timers.wrap(env, name, label)
-    timers.wrap(env, "_observe", "observations (own, patch, neighbours, links, task)")
-    timers.wrap(env, "_info", "infos (one dict per agent)")
+    timers.wrap(env, "observe", "observations (own, patch, neighbours, links, task)")
+    timers.wrap(env, "info", "infos (one dict per agent)")
     total = 0.0
     agent_steps = 0
     for k in range(steps):
