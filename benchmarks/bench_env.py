@@ -2,6 +2,7 @@
 agent counts.
 
     python benchmarks/bench_env.py [--counts 10 100 1000] [--steps 200] [--box-s 15] [--no-breakdown]
+        [--batches 10x10 10x100 10x1000] [--vector-only]
 
 Our side: `benchmarks/missions/beach_swarm.yaml`, a swarm already on the beach of gentle_fine
 searching it for mines (no sea transit), the count set per run with overrides={"swarm.count": n},
@@ -19,6 +20,13 @@ process, one core; on a shared machine expect +-20% between runs.
 
 Targets: at least 100x MPE's agent-steps/s at 100 agents, and at least 200,000 agent-steps/s at
 1000 robots.
+
+The batched environment (`swarm.sim.vector_env`, `--batches BxN`): B runs of N robots of the same
+mission, random actions (B, N, 3) drawn beforehand, agent-steps = robots in the mission summed over
+the timed steps; next to it the PettingZoo adapter (`SwarmEnv.step`, dicts) on one run of N robots,
+the same method. Issue 13's target: 2 M agent-steps/s at B x N = 10,000 robots (today's vector env
+loops over B `SwarmEnv`s; the batched core replaces the loop). `--vector-only` skips the MPE table
+(which needs the `bench` extra).
 
 Then (unless --no-breakdown), where our step's time goes at 100 robots and at the largest count:
 timers wrapped around the environment's internals for a separate run (so they do not slow the rates
@@ -50,6 +58,8 @@ MISSION = Path(__file__).resolve().parent / "missions" / "beach_swarm.yaml"
 #: The targets: ratio to MPE at 100 agents, our absolute rate at 1000 robots.
 TARGET_RATIO_AT_100 = 100.0
 TARGET_RATE_AT_1000 = 200_000.0
+#: Issue 13: the batched environment at B x N = 10,000 robots, random actions, one core.
+TARGET_VECTOR_RATE = 2_000_000.0
 
 
 @dataclass
@@ -100,6 +110,47 @@ def _wheel_actions(env: SwarmEnv, steps: int, seed: int) -> list[dict[str, np.nd
     rng = np.random.default_rng(seed)
     a = rng.uniform(-1.0, 1.0, (steps, len(env.possible_agents), 3)).astype(np.float32)
     return [dict(zip(env.possible_agents, a[k], strict=True)) for k in range(steps)]
+
+
+def vector_rate(b: int, n: int, steps: int, warmup: int, box_s: float, seed: int) -> Rate:
+    """Agent-steps/s of `vector_env` with b runs of n robots (autoreset keeps every run going)."""
+    vec = swarm.sim.vector_env(
+        mission=MISSION, num_envs=b, overrides={"swarm.count": n}, action_mode="wheels", seed=0
+    )
+    _, infos = vec.reset()
+    rng = np.random.default_rng(seed)
+    actions = rng.uniform(-1.0, 1.0, (min(steps + warmup, 20), b, n, 3)).astype(np.float32)
+    mask = infos["agent_mask"]
+    for k in range(warmup):
+        mask = vec.step(actions[k % len(actions)])[4]["agent_mask"]
+    done, seconds, agent_steps = 0, 0.0, 0
+    while done < steps and (done == 0 or seconds < box_s):
+        live = int(mask.sum())
+        t0 = time.perf_counter()
+        infos = vec.step(actions[(warmup + done) % len(actions)])[4]
+        seconds += time.perf_counter() - t0
+        mask = infos["agent_mask"]
+        done += 1
+        agent_steps += live
+    return Rate(agent_steps, done, seconds)
+
+
+def vector_table(batches: list[tuple[int, int]], steps: int, warmup: int, box_s: float, seed: int) -> None:
+    header = (
+        f"{'B x N':>11} {'robots':>7} | {'vector steps':>12} {'agent-steps/s':>14} {'ms/step':>8} | "
+        f"{'PZ (N) steps':>12} {'agent-steps/s':>14} {'ms/step':>8} | {'vs 2M':>6}"
+    )
+    print(header)
+    print("-" * len(header))
+    for b, n in batches:
+        vec = vector_rate(b, n, steps, warmup, box_s, seed)
+        pz = ours_rate(n, steps, warmup, box_s, seed)
+        share = vec.per_s / TARGET_VECTOR_RATE
+        print(
+            f"{f'{b} x {n}':>11} {b * n:>7} | {vec.steps:>12} {vec.per_s:>14,.0f} {vec.ms_per_step:>8.2f} | "
+            f"{pz.steps:>12} {pz.per_s:>14,.0f} {pz.ms_per_step:>8.2f} | {share:>6.1%}",
+            flush=True,
+        )
 
 
 def make_ours(n: int) -> SwarmEnv:
@@ -180,8 +231,8 @@ def breakdown(n: int, steps: int, seed: int, profile: bool) -> str:
     timers.wrap(env.physics, "step", "physics (skid model, terrain, waves)")
     for name, label in ADVANCE_PARTS:
         timers.wrap(env, name, label)
-    timers.wrap(env, "_observe", "observations (own, patch, neighbours, links, task)")
-    timers.wrap(env, "_info", "infos (one dict per agent)")
+    timers.wrap(env, "observe", "observations (own, patch, neighbours, links, task)")
+    timers.wrap(env, "info", "infos (one dict per agent)")
     total = 0.0
     agent_steps = 0
     for k in range(steps):
@@ -227,7 +278,12 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--seed", type=int, default=0, help="seed of the pre-drawn actions")
     ap.add_argument("--no-breakdown", action="store_true")
     ap.add_argument("--profile", action="store_true", help="cProfile instead of the timers")
+    ap.add_argument(
+        "--batches", nargs="+", default=["10x10", "10x100", "10x1000"], help="vector_env runs x robots"
+    )
+    ap.add_argument("--vector-only", action="store_true", help="only the vector env table (no MPE)")
     args = ap.parse_args(argv)
+    batches = [tuple(int(v) for v in spec.lower().split("x")) for spec in args.batches]
 
     print(
         f"python {platform.python_version()}, numpy {np.__version__}, {os.cpu_count()} cpus; "
@@ -235,6 +291,11 @@ def main(argv: list[str] | None = None) -> None:
     )
     print(f"up to {args.steps} timed steps after {args.warmup} warm-up steps, {args.box_s:g} s time box each")
     print()
+    if batches:
+        vector_table(batches, args.steps, args.warmup, args.box_s, args.seed)  # type: ignore[arg-type]
+        print()
+    if args.vector_only:
+        return
     header = (
         f"{'agents':>6} | {'ours steps':>10} {'ours agent-steps/s':>18} {'ms/step':>8} | "
         f"{'MPE steps':>9} {'MPE agent-steps/s':>17} {'ms/step':>9} | {'ratio':>8}"

@@ -6,6 +6,7 @@ import swarm.sim
 env = swarm.sim.parallel_env(mission="missions/mine_clear.yaml", overrides={"swarm.count": 40})
 aec = swarm.sim.env(mission="missions/landing.yaml")        # the AEC form, by PettingZoo's conversion
 env = pettingzoo.make("parallel", "surf_swarm/Swarm-v0", mission="missions/relay.yaml")
+vec = swarm.sim.vector_env(mission="missions/landing.yaml", num_envs=8)  # B runs on arrays (B, n, ...)
 ```
 
 Importing `swarm.sim` registers `surf_swarm/Swarm-v0` in PettingZoo's registries (parallel and AEC).
@@ -18,7 +19,8 @@ from typing import Any
 import pettingzoo
 from pettingzoo.utils import conversions, wrappers
 
-from swarm.sim.env import ACTION_MODES, COMMANDS, SimConfig, SwarmEnv
+from swarm.sim.env import ACTION_MODES, COMMANDS, SimConfig, StepOutcome, SwarmEnv
+from swarm.sim.vector import SwarmVectorEnv
 
 ENV_ID = "surf_swarm/Swarm-v0"
 
@@ -34,6 +36,13 @@ def env(**kwargs: Any) -> pettingzoo.AECEnv:
     return wrappers.OrderEnforcingWrapper(conversions.parallel_to_aec(SwarmEnv(**kwargs)))
 
 
+def vector_env(**kwargs: Any) -> SwarmVectorEnv:
+    """B runs of the mission on arrays (`swarm.sim.vector`): `mission=`, `num_envs=`, `overrides=`,
+    `action_mode=`, `normalize_obs=`, `seed=`, `config=`, `max_cycles=`, `env_class=` (a `SwarmEnv`
+    subclass with its own task hooks)."""
+    return SwarmVectorEnv(**kwargs)
+
+
 raw_env = SwarmEnv
 
 
@@ -46,4 +55,16 @@ def _register() -> None:
 
 _register()
 
-__all__ = ["ACTION_MODES", "COMMANDS", "ENV_ID", "SimConfig", "SwarmEnv", "env", "parallel_env", "raw_env"]
+__all__ = [
+    "ACTION_MODES",
+    "COMMANDS",
+    "ENV_ID",
+    "SimConfig",
+    "StepOutcome",
+    "SwarmEnv",
+    "SwarmVectorEnv",
+    "env",
+    "parallel_env",
+    "raw_env",
+    "vector_env",
+]

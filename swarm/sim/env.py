@@ -43,9 +43,32 @@ Actions (`action_mode`):
   sea. The built-in controller (`swarm.sim.control`) turns commands into wheel and jet commands.
 
 Observations are fixed-shape float32 Boxes (`swarm.sim.layout`); `state()` is the global state for
-centralized critics. Randomness: `reset(seed)` seeds one `SeedSequence`, spawned into independent
-streams for the mine field, waves, sensing, radio, hazards and the policy, so changing one part of
-the model does not reshuffle another's draws.
+centralized critics. `step_arrays` is `step` on arrays over all robots (rows in `possible_agents`
+order), for batched adapters (`swarm.sim.vector_env`).
+
+The task (what a robot sees, what it is rewarded for, when its episode ends, what its info says) is
+a few public hooks on arrays over all robots, called by `reset`/`step` after the world has moved, in
+the manner of HighwayEnv's `_reward` and VMAS's scenario; change the task by subclassing:
+
+```python
+class Closer(SwarmEnv):
+    def observation_box(self):                      # the space of one robot's row
+        return gymnasium.spaces.Box(-1e3, 1e3, (2,), np.float32)
+
+    def observe(self):                              # (n, 2): position only
+        return self.robot_state[:, :2].astype(np.float32)
+
+    def reward(self, step: StepOutcome):            # (n,): the team reward, less a cost for turning
+        return step.score_change - 0.01 * np.abs(self.robot_state[:, 5])
+```
+
+`terminated(step)` (who leaves now: by default those the world lost, expended or recovered) and
+`info(robots)` (one dict per robot) are the other two. Rows of robots that are not in `agents` are
+ignored, so a hook need not mask them.
+
+Randomness: `reset(seed)` seeds one `SeedSequence`, spawned into independent streams for the mine
+field, waves, sensing, radio, hazards and the policy, so changing one part of the model does not
+reshuffle another's draws.
 """
 
 from __future__ import annotations
@@ -108,6 +131,16 @@ MUSTER_FROM_WATER_M = 5.0
 STATION_KEEP_M = 1.0
 #: Seconds between trajectory samples kept for rendering tracks.
 TRACK_SAMPLE_S = 5.0
+
+
+@dataclass(frozen=True)
+class StepOutcome:
+    """What the world's step just did, handed to the task hooks (`reward`, `terminated`)."""
+
+    score_change: float  # change of the mission score (`swarm.sim.criteria`): the default team reward
+    ended: np.ndarray  # (n,) bool: robots the world took out of the mission this step (lost, expended,
+    # recovered); a robot out of time is truncated instead (`time_up`)
+    time_up: bool  # the time limit (or max_cycles) is reached: every robot still in is truncated
 
 
 @dataclass(frozen=True)
@@ -245,8 +278,7 @@ class SwarmEnv(ParallelEnv):
             self.config.patch_size, self.config.patch_spacing_m, self.config.neighbours
         )
         extent = float(max(self.beach.width_m, self.beach.height_m))
-        low, high = self.layout.bounds(extent, self.time_limit_s)
-        self._obs_space = gymnasium.spaces.Box(low, high, dtype=np.float32)
+        self._obs_bounds = self.layout.bounds(extent, self.time_limit_s)
         if action_mode == "wheels":
             self._act_space: gymnasium.spaces.Space = gymnasium.spaces.Box(-1.0, 1.0, (3,), np.float32)
         else:
@@ -272,7 +304,11 @@ class SwarmEnv(ParallelEnv):
     # spaces -----------------------------------------------------------------------------------------
     @functools.cache  # noqa: B019 (one space object per agent, as PettingZoo expects)
     def observation_space(self, agent: str) -> gymnasium.spaces.Space:
-        return self._obs_space
+        return self._observation_box
+
+    @functools.cached_property
+    def _observation_box(self) -> gymnasium.spaces.Box:
+        return self.observation_box()
 
     @functools.cache  # noqa: B019
     def action_space(self, agent: str) -> gymnasium.spaces.Space:
@@ -387,12 +423,18 @@ class SwarmEnv(ParallelEnv):
         self._agent_idx = np.arange(n, dtype=np.intp)  # self.agents as indices, in the same order
 
     def reset(self, seed: int | None = None, options: dict | None = None) -> tuple[dict, dict]:
+        self.reset_arrays(seed)
+        obs = self.observe()
+        agents, idx = self.agents, self._agent_idx
+        return dict(zip(agents, obs[idx], strict=True)), dict(zip(agents, self.info(idx), strict=True))
+
+    def reset_arrays(self, seed: int | None = None) -> np.ndarray:
+        """`reset` on arrays: (n, obs_dim) every robot's observation, rows in `possible_agents`
+        order (infos: `info(robots)`)."""
         self._reset_state(seed)
         self._event("mission_start", seed=seed, robots=self.n, mines=len(self.minefield))
         self._release()
-        obs = self._observe()
-        infos = {a: self._info(self.agent_index[a]) for a in self.agents}
-        return {a: obs[self.agent_index[a]] for a in self.agents}, infos
+        return self.observe()
 
     # events ------------------------------------------------------------------------------------------
     def _event(self, kind: str, robot: int | None = None, **data: Any) -> None:
@@ -413,19 +455,75 @@ class SwarmEnv(ParallelEnv):
     def step(self, actions: dict[str, Any]) -> tuple[dict, dict, dict, dict, dict]:
         if not self.agents:  # as PettingZoo's own parallel envs do once everyone is done
             return {}, {}, {}, {}, {}
-        terminated, truncate, reward = self._advance(actions)
-        obs_all = self._observe()
         agents, idx = self.agents, self._agent_idx
+        obs_all, rew, term, trunc = self._step_task(actions)
         obs = dict(zip(agents, obs_all[idx], strict=True))
-        rewards = dict.fromkeys(agents, reward)
-        ended = terminated[idx].tolist()
-        terms = dict(zip(agents, ended, strict=True))
-        truncs = dict(zip(agents, [truncate and not e for e in ended], strict=True))
-        self._finish(terminated, truncate)
-        infos = self._infos(agents, idx)
+        rewards = dict(zip(agents, rew[idx].tolist(), strict=True))
+        terms = dict(zip(agents, term[idx].tolist(), strict=True))
+        truncs = dict(zip(agents, trunc[idx].tolist(), strict=True))
+        infos = dict(zip(agents, self.info(idx), strict=True))
         if self.render_mode == "human":
             self.render()
         return obs, rewards, terms, truncs, infos
+
+    def step_arrays(self, actions: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """`step` on arrays over all robots, rows in `possible_agents` order: `actions` (n, 3) (wheels:
+        left, right, jet; command: command index, target x, y), of which only the rows of robots in
+        `agents` are used. Returns observations (n, obs_dim) float32, rewards (n,) float64,
+        terminated and truncated (n,) bool; the rows of robots that were not in `agents` before the
+        step are zero (False). Infos: `info(robots)`. Raises once every agent is done."""
+        if not self.agents:
+            raise SwarmError("sim: step_arrays() after the episode ended; call reset()")
+        obs, rew, term, trunc = self._step_task(np.asarray(actions))
+        if self.render_mode == "human":
+            self.render()
+        return obs, rew, term, trunc
+
+    def _step_task(self, actions: dict[str, Any] | np.ndarray) -> tuple[np.ndarray, ...]:
+        """The world's step, then the task hooks; rows of robots not in `agents` before it zeroed."""
+        was_in = np.zeros(self.n, bool)
+        was_in[self._agent_idx] = True
+        ended, time_up, score_change = self._advance(actions)
+        outcome = StepOutcome(score_change, ended, time_up)
+        obs = self.observe()
+        obs[~was_in] = 0.0
+        rew = np.where(was_in, np.asarray(self.reward(outcome), np.float64), 0.0)
+        term = np.asarray(self.terminated(outcome), bool) & was_in
+        trunc = (was_in & ~term) if time_up else np.zeros(self.n, bool)
+        self._finish(term, time_up)
+        return obs, rew, term, trunc
+
+    # the task hooks (module docstring): override these to change the task ----------------------------------
+    def observation_box(self) -> gymnasium.spaces.Box:
+        """The space of one robot's observation (every robot shares it); asked once, lazily."""
+        low, high = self._obs_bounds
+        return gymnasium.spaces.Box(low, high, dtype=np.float32)
+
+    def observe(self) -> np.ndarray:
+        """(n, obs_dim) float32: every robot's observation now (`swarm.sim.layout`), a row each in
+        `possible_agents` order; a fresh array the caller may change."""
+        return self._observe()
+
+    def reward(self, step: StepOutcome) -> np.ndarray:
+        """(n,) each robot's reward for the step just taken: by default the team reward, the change
+        of the mission score, the same for every robot."""
+        return np.full(self.n, step.score_change)
+
+    def terminated(self, step: StepOutcome) -> np.ndarray:
+        """(n,) bool: robots whose episode ends now; they leave `agents`. By default those the world
+        took out of the mission (lost, expended, recovered). A robot the task ends while the world
+        has not stays in the world where it is, with its wheels stopped."""
+        return step.ended
+
+    def info(self, robots: np.ndarray) -> list[dict]:
+        """One info dict for each robot index in `robots`: {"phase", "role"}, and once it has left
+        the mission "end_reason" (and "lost_reason" if it was lost). Robots still working share one
+        dict per (phase, role): treat infos as read-only."""
+        shared = self._shared_infos
+        out = [shared[k] for k in (self.phase[robots] * len(ROLES) + self.role[robots]).tolist()]
+        for k in np.flatnonzero(~self.alive[robots]).tolist():  # those leaving now get their own
+            out[k] = self._info(int(robots[k]))
+        return out
 
     def advance(self, actions: dict[str, Any]) -> None:
         """`step` without building observations, rewards and infos: for runners that read the
@@ -433,7 +531,7 @@ class SwarmEnv(ParallelEnv):
         terminated, truncate, _ = self._advance(actions)
         self._finish(terminated, truncate)
 
-    def _advance(self, actions: dict[str, Any]) -> tuple[np.ndarray, bool, float]:
+    def _advance(self, actions: dict[str, Any] | np.ndarray) -> tuple[np.ndarray, bool, float]:
         """One step of the world; returns who was terminated, whether time ran out, the reward."""
         if not self.agents:
             raise SwarmError("sim: step() after the episode ended; call reset()")
@@ -546,10 +644,22 @@ class SwarmEnv(ParallelEnv):
             self._event("mission_end", outcome=self.score.outcome())
 
     # actions --------------------------------------------------------------------------------------
-    def _commands(self, actions: dict[str, Any]) -> tuple[np.ndarray, np.ndarray]:
+    def _commands(self, actions: dict[str, Any] | np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         n = self.n
         wheels = np.zeros((n, 2))
         jet = np.zeros(n)
+        if isinstance(actions, np.ndarray):  # every robot's row; only those in `agents` count
+            if actions.shape != (n, 3):
+                raise SwarmError(f"sim: actions of shape {actions.shape}, expected ({n}, 3)")
+            idx = self._agent_idx
+            if self.action_mode == "command":
+                for i, (cmd, tx, ty) in zip(idx.tolist(), actions[idx].tolist(), strict=True):
+                    self.set_command(i, int(cmd), np.array([tx, ty]))
+                return self.controller_commands()
+            act = np.clip(actions[idx].astype(np.float64), -1.0, 1.0)
+            wheels[idx] = act[:, :2] * (self.limits.max_wheel_speed_mps / self.limits.wheel_radius_m)
+            jet[idx] = act[:, 2] * self.limits.jet_thrust_max_n
+            return wheels, jet
         if self.action_mode == "wheels":
             if actions:
                 names = list(actions)
@@ -1056,23 +1166,13 @@ class SwarmEnv(ParallelEnv):
             self._link_keys_version = self.links_version
         return self._link_keys_cache
 
-    def _infos(self, agents: list[str], idx: np.ndarray) -> dict[str, dict]:
-        shared = self._shared_infos
-        keys = (self.phase[idx] * len(ROLES) + self.role[idx]).tolist()
-        infos = dict(zip(agents, [shared[k] for k in keys], strict=True))
-        for k in np.flatnonzero(~self.alive[idx]).tolist():  # those leaving now get their own
-            infos[agents[k]] = self._info(int(idx[k]))
-        return infos
-
     @functools.cached_property
     def _shared_infos(self) -> list[dict]:
         """One info dict per (phase, role) for robots still working (read-only by convention)."""
         return [{"phase": p, "role": r} for p in PHASES for r in ROLES]
 
     def _info(self, i: int) -> dict:
-        """{"phase", "role"}, and once it has left the mission "end_reason" (and "lost_reason" if
-        it was lost). Robots still working share one dict per (phase, role): treat infos as
-        read-only."""
+        """Robot i's default info (`info`)."""
         reason = self.end_reason[i]
         if reason is None:
             return self._shared_infos[int(self.phase[i]) * len(ROLES) + int(self.role[i])]
