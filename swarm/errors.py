@@ -24,3 +24,14 @@ class InputError(SwarmError):
         self.found = found
         self.expected = expected
         super().__init__(f"{self.source}: {where}: found {found!r}, expected {expected}")
+
+
+class FolderBusy(SwarmError):
+    """Another process holds the lock on an output folder (`swarm.files.folder_lock`)."""
+
+    def __init__(self, folder: str | Path, holder: str) -> None:
+        self.folder = str(folder)
+        self.holder = holder
+        super().__init__(
+            f"{self.folder}: in use by {holder}; wait for it to finish, or write to another folder"
+        )

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import contextlib
 import io
+import json
 import math
 import os
 import signal
@@ -302,3 +303,30 @@ def test_plan_evaluate_puts_the_simulations_beside_the_plan(tmp_path, capsys) ->
     # the report rebuilt from the folder says the same
     assert main(["report", str(out), "--format", "md", "-o", str(tmp_path / "again.md")]) == 0
     assert "The plan in simulation" in (tmp_path / "again.md").read_text()
+
+
+@pytest.mark.slow
+def test_two_studies_into_one_folder_one_proceeds_and_no_row_is_doubled(tmp_path) -> None:
+    """Issue 15: two `swarm study` at once into one --out used to leave 5 rows for a 3-run study."""
+    out = tmp_path / "cc"
+    argv = ["swarm", "study", str(REPO / "missions" / "landing.yaml"), "--runs", "3", "--workers", "1",
+            "--out", str(out)]  # fmt: skip
+    code = "import sys; from swarm.cli import main; sys.exit(main(sys.argv[2:]))"
+    procs = [
+        subprocess.Popen(
+            [sys.executable, "-c", code, *argv], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+        )
+        for _ in range(2)
+    ]
+    results = [(p, *p.communicate(timeout=300)) for p in procs]
+    assert sorted(p.returncode for p, _, _ in results) == [0, 2]
+    (winner, _, _), (_, _, err) = sorted(results, key=lambda r: r[0].returncode)
+    assert err.strip().splitlines() == [
+        f"swarm: error: {out}: in use by pid {winner.pid} ({' '.join(argv)}); "
+        "wait for it to finish, or write to another folder"
+    ]
+    table = pq.read_table(out / "results.parquet")
+    keys = list(zip(table.column("point").to_pylist(), table.column("run").to_pylist(), strict=True))
+    assert keys == [(0, 0), (0, 1), (0, 2)]
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["runs"] == 3 and summary["points"][0]["runs"] == 3
