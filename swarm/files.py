@@ -9,6 +9,8 @@ import fcntl
 import os
 import secrets
 import sys
+import zipfile
+import zlib
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -126,6 +128,31 @@ def read_text(path: str | os.PathLike[str], what: str) -> str:
         raise InputError(path, "(file)", exc.strerror, f"a readable {what}") from None
     except UnicodeDecodeError:
         raise InputError(path, "(file)", "bytes that are not UTF-8 text", f"a readable {what}") from None
+
+
+def read_npz(path: str | os.PathLike[str], expected: str) -> dict[str, object]:
+    """The members of an `.npz` archive (arrays; a member that is not `.npy` comes back as bytes).
+    An empty, truncated, damaged or foreign file is one `InputError` naming it, saying `expected`."""
+    import numpy as np
+
+    path = Path(path)
+    try:
+        size = path.stat().st_size
+        whole = zipfile.is_zipfile(path)
+    except OSError as exc:
+        raise InputError(path, "(file)", exc.strerror, expected) from None
+    if size == 0:
+        raise InputError(path, "(file)", "an empty file", expected)
+    if not whole:  # a truncated archive has lost its central directory, at the end
+        raise InputError(path, "(file)", f"{size} bytes that are not a whole zip archive", expected)
+    try:
+        with np.load(path, allow_pickle=False) as npz:
+            return {k: npz[k] for k in npz.files}
+    except (OSError, ValueError, EOFError, KeyError, zipfile.BadZipFile, zlib.error) as exc:
+        first = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise InputError(path, "(file)", f"a damaged archive ({first[:100]})", expected) from None
+    except MemoryError:
+        raise InputError(path, "(file)", "arrays larger than this machine's memory", expected) from None
 
 
 def parse_yaml(text: str, source: str | os.PathLike[str], loader: type = yaml.SafeLoader) -> object:

@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import io
 import json
-import zipfile
 from collections import Counter
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -26,7 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from swarm.errors import InputError
-from swarm.files import atomic_path, read_text, write_text_atomic
+from swarm.files import atomic_path, read_npz, read_text, write_text_atomic
 from swarm.mission.plan import MissionPlan
 from swarm.mission.schema import Mission
 from swarm.sim.env import SimConfig, SwarmEnv
@@ -266,8 +265,7 @@ def read_log(out_dir: str | Path, plan: MissionPlan | None = None) -> MissionLog
     events = _read_json_lines(out / "events.jsonl")
     where = out / "trajectories.npz"
     try:
-        with np.load(where, allow_pickle=False) as npz:
-            arrays = {k: npz[k] for k in npz.files}
+        arrays = read_npz(where, "the trajectories swarm simulate wrote")
         robots = [str(r) for r in arrays["robots"]]
         n = len(robots)
         times = arrays["times_s"]
@@ -299,7 +297,7 @@ def read_log(out_dir: str | Path, plan: MissionPlan | None = None) -> MissionLog
             completed_s=summary.get("completed_s"),
         )
         log.end_reasons = _end_reasons(robots, events, alive[-1] if len(alive) else np.ones(n, bool))
-    except (OSError, ValueError, KeyError, TypeError, AttributeError, zipfile.BadZipFile) as exc:
+    except (ValueError, KeyError, TypeError, AttributeError) as exc:
         found = f"{type(exc).__name__}: {exc}" if str(exc) else type(exc).__name__
         raise InputError(where, "(contents)", found, "a log written by swarm simulate") from None
     return log

@@ -52,7 +52,7 @@ from shapely.geometry.base import BaseGeometry
 from shapely.validation import explain_validity
 
 from swarm.errors import InputError
-from swarm.files import atomic_path, parse_yaml, read_text, write_text_atomic
+from swarm.files import atomic_path, parse_yaml, read_npz, read_text, write_text_atomic
 from swarm.robot.terrain import TerrainLibrary, load_library
 from swarm.world.beachmap import REGION_KINDS, BeachMap, Region
 
@@ -262,13 +262,7 @@ def _read_yaml(path: Path) -> object:
 def _load_grid(path: Path, source: Path) -> tuple[np.ndarray, np.ndarray]:
     if not path.is_file():
         raise InputError(source, "grid", str(path), "an existing .npz file (relative to the map YAML)")
-    try:
-        with np.load(path, allow_pickle=False) as npz:
-            arrays = {k: npz[k] for k in npz.files}
-    except (OSError, ValueError, EOFError) as exc:
-        raise InputError(
-            path, "(file)", str(exc).splitlines()[0] if str(exc) else "unreadable", "an .npz"
-        ) from None
+    arrays = read_npz(path, "an .npz grid (numpy.savez) holding arrays 'terrain' and 'elevation_m'")
     names = sorted(arrays)
     for name in GRID_ARRAYS:
         if name not in arrays:
@@ -280,6 +274,8 @@ def _load_grid(path: Path, source: Path) -> tuple[np.ndarray, np.ndarray]:
         raise InputError(path, extra[0], f"arrays {names}", "only arrays 'terrain' and 'elevation_m'")
     for name, dtype in GRID_ARRAYS.items():
         a = arrays[name]
+        if not isinstance(a, np.ndarray):
+            raise InputError(path, name, "a member that is not a .npy array", f"a {dtype} array")
         if a.dtype != dtype:
             raise InputError(path, name, f"dtype {a.dtype}", f"dtype {dtype}")
         if a.ndim != 2 or 0 in a.shape:
