@@ -7,6 +7,7 @@ import contextlib
 import errno
 import fcntl
 import os
+import re
 import secrets
 import sys
 import zipfile
@@ -155,10 +156,45 @@ def read_npz(path: str | os.PathLike[str], expected: str) -> dict[str, object]:
         raise InputError(path, "(file)", "arrays larger than this machine's memory", expected) from None
 
 
-def parse_yaml(text: str, source: str | os.PathLike[str], loader: type = yaml.SafeLoader) -> object:
-    """YAML text to Python objects; a syntax error is an `InputError` naming the line."""
+class _DuplicateKey(Exception):
+    def __init__(self, key: object, line: int) -> None:
+        super().__init__(key)
+        self.key, self.line = key, line
+
+
+class StrictLoader(yaml.SafeLoader):
+    """Safe YAML with duplicate keys refused and YAML 1.2 exponent floats (`2.4e9`, `1e5`, `2e4`;
+    YAML 1.1, PyYAML's default, reads those as strings)."""
+
+    def construct_mapping(self, node, deep=False):  # type: ignore[override]
+        self.flatten_mapping(node)
+        seen: set[object] = set()
+        for key_node, _ in node.value:
+            key = self.construct_object(key_node, deep=deep)
+            try:
+                duplicate = key in seen
+            except TypeError:  # unhashable keys: let the base class complain
+                break
+            if duplicate:
+                raise _DuplicateKey(key, key_node.start_mark.line + 1)
+            seen.add(key)
+        return super().construct_mapping(node, deep=deep)
+
+
+StrictLoader.add_implicit_resolver(
+    "tag:yaml.org,2002:float",
+    re.compile(r"^[-+]?[0-9][0-9_]*(?:\.[0-9_]*)?[eE][-+]?[0-9]+$"),
+    list("-+0123456789"),
+)
+
+
+def parse_yaml(text: str, source: str | os.PathLike[str], loader: type = StrictLoader) -> object:
+    """YAML text to Python objects (strictly: `StrictLoader`); a syntax error or a key given twice
+    in one mapping is an `InputError` naming the line."""
     try:
         return yaml.load(text, Loader=loader)
+    except _DuplicateKey as exc:
+        raise InputError(source, f"line {exc.line}", exc.key, "each key once in a mapping") from None
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         where = f"line {mark.line + 1}" if mark else "(file)"
