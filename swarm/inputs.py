@@ -22,7 +22,7 @@ import types
 from collections.abc import Mapping, Sequence
 from typing import Annotated, Any, Literal, TypeVar, Union, get_args, get_origin
 
-from pydantic import BaseModel, ConfigDict, ValidationError, model_validator
+from pydantic import BaseModel, ConfigDict, PlainValidator, ValidationError, WithJsonSchema, model_validator
 from pydantic_core import PydanticCustomError
 
 from swarm.errors import InputError
@@ -71,6 +71,24 @@ def expected(expected: str, found: object = None, key: str | None = None) -> Pyd
     return PydanticCustomError("expected", "{expected}", ctx)
 
 
+def _xy(value: object) -> tuple[float, float]:
+    if (
+        isinstance(value, list | tuple)
+        and len(value) == 2
+        and all(isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v) for v in value)
+    ):
+        return float(value[0]), float(value[1])
+    raise expected("a pair [x, y] of finite numbers (metres)")
+
+
+#: A point [x, y] in metres (a YAML list; strict pydantic would want a tuple).
+XY = Annotated[
+    tuple[float, float],
+    PlainValidator(_xy),
+    WithJsonSchema({"type": "array", "items": {"type": "number"}, "minItems": 2, "maxItems": 2}),
+]
+
+
 def tagged_classes(ann: Any) -> dict[str, type[BaseModel]]:
     """{tag: model} of a union of models told apart by a `type: Literal[...]` field ({} otherwise)."""
     out: dict[str, type[BaseModel]] = {}
@@ -89,9 +107,15 @@ def validate(model: type[M], data: object, source: str | os.PathLike[str], tag_w
     try:
         return model.model_validate(data)
     except ValidationError as exc:
-        first = exc.errors(include_url=False)[0]
-        parts, found, expected = describe(first, data, model, tag_words)
+        parts, found, expected = describe(first_error(exc, data, model), data, model, tag_words)
         raise InputError(source, key_path(parts), found, expected) from None
+
+
+def first_error(exc: ValidationError, raw: object, root: type[BaseModel]) -> dict[str, Any]:
+    """The error to report: the first, unless it comes from a union member the data was not
+    meant for (a mapping tried as a string), when the first from the member it was meant for."""
+    errors = exc.errors(include_url=False)
+    return next((e for e in errors if _At(e["loc"], raw, root).on_track), errors[0])
 
 
 def load_model(path: str | os.PathLike[str], model: type[M], what: str) -> M:
@@ -118,7 +142,8 @@ def _strip(ann: Any) -> Any:
 
 
 def kind_of(ann: Any) -> tuple[str, Any]:
-    """('model', cls) | ('list', item) | ('dict', value) | ('tagged', None) | ('leaf', type)."""
+    """('model', cls) | ('list', item) | ('dict', value) | ('tagged', None) | ('union', members) |
+    ('leaf', type)."""
     ann = _strip(ann)
     if isinstance(ann, type) and issubclass(ann, BaseModel):
         return "model", ann
@@ -131,7 +156,25 @@ def kind_of(ann: Any) -> tuple[str, Any]:
         args = [_strip(a) for a in get_args(ann)]
         if all(isinstance(a, type) and issubclass(a, BaseModel) and "type" in a.model_fields for a in args):
             return "tagged", None
+        return "union", tuple(a for a in args if a is not type(None))
     return "leaf", ann
+
+
+def _label(ann: Any) -> str:
+    """The start of pydantic's label for a union member in an error location ('str', 'dict', 'X')."""
+    origin = get_origin(ann) or ann
+    return getattr(origin, "__name__", str(origin))
+
+
+def _member_for(members: Sequence[Any], node: object) -> Any:
+    """The union member the data `node` was meant for: the first whose type it has, else None."""
+    for m in members:
+        origin = get_origin(m) or m
+        if isinstance(origin, type) and issubclass(origin, BaseModel):
+            origin = dict
+        if isinstance(origin, type) and isinstance(node, origin):
+            return m
+    return None
 
 
 ABSENT = object()
@@ -154,12 +197,17 @@ class _At:
         self.field = None  # its FieldInfo
         self.ann: Any = None  # the type expected at the location
         self.is_key = False
+        self.on_track = True  # every union on the way was tried with the member the data is for
         ann: Any = root
         node = raw
         for el in loc:
             kind, inner = kind_of(ann) if ann is not None else ("leaf", None)
             if kind == "tagged":  # pydantic puts the tag (the `type`) in the location: not a key of the file
                 ann = tagged_classes(ann).get(el) if isinstance(el, str) else None
+                continue
+            if kind == "union":  # pydantic names the member it tried: not a key of the file either
+                ann = _member_for(inner, node)
+                self.on_track &= ann is not None and str(el).split("[")[0] == _label(ann)
                 continue
             if el == "[key]":  # a mapping's key, not its value, is wrong
                 self.ann, self.is_key = str, True

@@ -36,7 +36,7 @@ from pydantic import ValidationError
 
 from swarm.errors import InputError
 from swarm.files import read_yaml
-from swarm.inputs import ABSENT, Parts, child_at, describe, key_path, kind_of, model_keys
+from swarm.inputs import ABSENT, Parts, child_at, describe, first_error, key_path, kind_of, model_keys
 from swarm.mission.schema import (
     TASK_CLASSES,
     Mission,
@@ -433,8 +433,7 @@ def mission_from_dict(
     try:
         mission = Mission.model_validate(data)
     except ValidationError as exc:
-        first = exc.errors(include_url=False)[0]
-        parts, found, expected = describe(first, data, Mission, "a task type")
+        parts, found, expected = describe(first_error(exc, data, Mission), data, Mission, "a task type")
         raise report.error(parts, found, expected) from None
     if mission.name is None:
         mission = mission.model_copy(update={"name": Path(source).stem})

@@ -378,7 +378,7 @@ def _set_region(name, spec):
 BOWTIE = [[105, -12], [115, -6], [115, -12], [105, -6]]
 YAML_CASES = {
     "missing-key": (lambda d: d.pop("cell_m"), "cell_m", "nothing"),
-    "unknown-key": (_set("colour", "red"), "colour", "one of the keys"),
+    "unknown-key": (_set("colour", "red"), "colour", "no such key (known keys: name, cell_m, origin_m"),
     "name-type": (_set("name", 12), "name", "12"),
     "negative-cell": (_set("cell_m", -0.5), "cell_m", "-0.5"),
     "cell-text": (_set("cell_m", "1 m"), "cell_m", "'1 m'"),
