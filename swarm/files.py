@@ -6,6 +6,7 @@ from __future__ import annotations
 import contextlib
 import errno
 import fcntl
+import json
 import os
 import re
 import secrets
@@ -206,3 +207,26 @@ def parse_yaml(text: str, source: str | os.PathLike[str], loader: type = StrictL
 def read_yaml(path: str | os.PathLike[str], what: str) -> object:
     """Read and parse a YAML file with one-line errors for the user (what: 'robot YAML file')."""
     return parse_yaml(read_text(path, what), path)
+
+
+def _unique_keys(pairs: list[tuple[str, object]]) -> dict:
+    seen: dict[str, object] = {}
+    for key, value in pairs:
+        if key in seen:
+            raise _DuplicateKey(key, 0)
+        seen[key] = value
+    return seen
+
+
+def read_json(path: str | os.PathLike[str], what: str) -> object:
+    """Read and parse a JSON file with one-line errors: syntax (naming the line), a key given
+    twice in one object, or an unreadable file."""
+    text = read_text(path, what)
+    try:
+        return json.loads(text, object_pairs_hook=_unique_keys)
+    except json.JSONDecodeError as exc:
+        raise InputError(path, f"line {exc.lineno}", exc.msg, f"valid JSON ({what})") from None
+    except _DuplicateKey as exc:
+        raise InputError(path, "(a JSON object)", exc.key, "each key once in an object") from None
+    except RecursionError:
+        raise InputError(path, "(file)", "nesting too deep", f"valid JSON ({what})") from None

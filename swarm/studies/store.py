@@ -17,17 +17,34 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
+from pydantic import Field
 
 from swarm.errors import InputError
-from swarm.files import atomic_path, write_text_atomic
+from swarm.files import atomic_path, read_json, write_text_atomic
+from swarm.inputs import InputModel, validate
 
 PARTS = "parts"
 RESULTS = "results.parquet"
 SPEC = "study.json"
+
+
+class StudyFile(InputModel):
+    """study.json: what identifies a study (`StudySpec.as_dict`); a resume must match it."""
+
+    mission: str = Field(min_length=1, description="The mission file, resolved.")
+    runs: int = Field(ge=1)
+    sweeps: dict[str, list[Any]]
+    seed: int = Field(ge=0)
+
+
+def read_study_file(path: str | Path) -> StudyFile:
+    """A study.json, checked; a damaged one is an `InputError` naming the file and key."""
+    return validate(StudyFile, read_json(path, "study.json"), path)
 
 
 class ResultStore:
@@ -42,15 +59,12 @@ class ResultStore:
         """Create the folder, or check that an existing one holds the same study."""
         path = self.out / SPEC
         if path.exists():
-            try:
-                old = json.loads(path.read_text())
-            except (OSError, json.JSONDecodeError):
-                old = None
-            if old != spec:
+            old = read_study_file(path)
+            if old.model_dump() != spec:
                 raise InputError(
                     str(path),
                     "(study)",
-                    "a different study" if old is not None else "an unreadable study.json",
+                    "a different study",
                     "the same mission, runs, sweeps and seed to resume it, or a new --out folder",
                 )
         self.parts.mkdir(parents=True, exist_ok=True)

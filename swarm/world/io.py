@@ -54,7 +54,7 @@ from shapely.geometry.base import BaseGeometry
 from shapely.validation import explain_validity
 
 from swarm.errors import InputError
-from swarm.files import atomic_path, read_npz, read_text, read_yaml, write_text_atomic
+from swarm.files import atomic_path, read_json, read_npz, read_text, read_yaml, write_text_atomic
 from swarm.inputs import XY, InputModel, expected, validate
 from swarm.robot.terrain import TerrainLibrary, load_library
 from swarm.world.beachmap import REGION_KINDS, BeachMap, Region
@@ -279,20 +279,12 @@ def regions_from_geojson(
     return regions
 
 
-def _read_json(path: Path) -> object:
-    text = read_text(path, "GeoJSON file")
-    try:
-        return json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise InputError(path, f"line {exc.lineno}", exc.msg, "GeoJSON (JSON)") from None
-
-
 def load_geojson_regions(
     path: str | Path, bounds: tuple[float, float, float, float] | None = None
 ) -> dict[str, Region]:
     """Regions from a GeoJSON file (map metres), checked against `bounds` when given."""
     path = Path(path)
-    return regions_from_geojson(_read_json(path), path, bounds)
+    return regions_from_geojson(read_json(path, "GeoJSON file"), path, bounds)
 
 
 # --- the map file ----------------------------------------------------------------------------------
