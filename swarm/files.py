@@ -150,7 +150,16 @@ def read_npz(path: str | os.PathLike[str], expected: str) -> dict[str, object]:
     try:
         with np.load(path, allow_pickle=False) as npz:
             return {k: npz[k] for k in npz.files}
-    except (OSError, ValueError, EOFError, KeyError, zipfile.BadZipFile, zlib.error) as exc:
+    except (
+        OSError,
+        ValueError,
+        EOFError,
+        KeyError,
+        zipfile.BadZipFile,
+        zlib.error,
+        NotImplementedError,  # a header naming a compression method zipfile does not have
+        RuntimeError,  # a header flagging the member as encrypted
+    ) as exc:
         first = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
         raise InputError(path, "(file)", f"a damaged archive ({first[:100]})", expected) from None
     except MemoryError:

@@ -167,7 +167,7 @@ def check_planner_params(planner: str, params: dict, source: str) -> None:
             raise InputError(source, f"params.{key}", value, "a number or true/false")
         try:
             setter(value)
-        except (TypeError, ValueError):
+        except (TypeError, ValueError, RuntimeError):  # RuntimeError: OMPL's own range checks
             doc = (setter.__doc__ or "").split("\n")[0]
             raise InputError(source, f"params.{key}", value, f"a value {planner}.{doc} accepts") from None
 
