@@ -593,6 +593,7 @@ def _cmd_plan(args: argparse.Namespace) -> int:
     from swarm.mission.plan import plan_mission, write_plan
     from swarm.report.document import today
     from swarm.report.plan_report import summary_rows, write_plan_report
+    from swarm.sim.memory import check_fits
 
     if args.seed is not None and args.seed < 0:
         raise InputError("command line", "--seed", args.seed, "a seed >= 0")
@@ -606,6 +607,7 @@ def _cmd_plan(args: argparse.Namespace) -> int:
     if not args.mission.is_file():
         raise InputError("command line", "MISSION.yaml", str(args.mission), "an existing mission YAML file")
     mission = load_mission(args.mission, overrides, overrides_source="--set")
+    check_fits(mission, simulate=bool(args.evaluate), at_once=1)
     out = args.out or Path("reports") / f"{mission.name}-{time.strftime('%Y%m%d-%H%M%S')}"
     if out.exists() and not out.is_dir():
         raise InputError("command line", "--out", str(out), "a folder (this is a file)")
@@ -736,6 +738,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     from swarm.mission.plan import plan_mission, write_plan
     from swarm.report.document import today
     from swarm.report.sim_report import criteria_rows, end_state_rows, loss_rows, verdict, write_sim_report
+    from swarm.sim.memory import check_fits
     from swarm.sim.render import Animator, check_animation_path
     from swarm.sim.run import simulate, write_log
 
@@ -752,6 +755,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     if not args.mission.is_file():
         raise InputError("command line", "MISSION.yaml", str(args.mission), "an existing mission YAML file")
     mission = load_mission(args.mission, overrides, overrides_source="--set")
+    check_fits(mission)  # before planning, which needs most of it
     out = args.out or Path("reports") / f"{mission.name}-sim-{time.strftime('%Y%m%d-%H%M%S')}"
     if out.exists() and not out.is_dir():
         raise InputError("command line", "--out", str(out), "a folder (this is a file)")
@@ -978,6 +982,7 @@ def _cmd_study(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
     from swarm.report.study_report import answer, study_rows, write_study_report
+    from swarm.studies.backends import default_workers
     from swarm.studies.study import StudySpec, run_study
     from swarm.studies.sweep import Sweep, check_points, parse_sweeps
 
@@ -1010,7 +1015,9 @@ def _cmd_study(args: argparse.Namespace) -> int:
         raise InputError("command line", "--out", str(out), "a folder (this is a file)")
     with _output_folder(out, args):
         spec = StudySpec(str(args.mission), args.runs, sweeps, args.seed, args.target, args.confidence)
-        check_points(spec.mission_path, sweeps)  # every point valid before anything starts
+        # every point valid, and fitting in memory, before anything starts
+        local = args.backend == "local"  # Ray's workers have their own machines' memory
+        check_points(spec.mission_path, sweeps, at_once=(args.workers or default_workers()) if local else 1)
 
         with tqdm(desc="study", unit="run", file=sys.stderr, dynamic_ncols=True) as bar:
 

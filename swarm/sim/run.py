@@ -30,10 +30,10 @@ from swarm.mission.plan import MissionPlan
 from swarm.mission.schema import Mission
 from swarm.sim.env import SimConfig, SwarmEnv
 from swarm.sim.layout import PHASES, ROLES
+from swarm.sim.memory import RECORD_EVERY_S, check_fits
 from swarm.sim.policy import ScriptedPolicy
 
 #: Seconds between trajectory samples in the log.
-RECORD_EVERY_S = 2.0
 #: The log's format version, written into outcome.json.
 LOG_VERSION = 1
 
@@ -110,7 +110,9 @@ def simulate(
     on_step: Callable[[SwarmEnv], None] | None = None,
 ) -> MissionLog:
     """Run the mission once with the scripted policy. `progress(t_s, time_limit_s)` is called as
-    simulated time passes; `on_step(env)` after every step (animation frames)."""
+    simulated time passes; `on_step(env)` after every step (animation frames). A run that would
+    not fit in memory is refused before anything is allocated (`swarm.sim.memory`)."""
+    check_fits(mission, record_every_s=record_every_s)
     env = SwarmEnv(mission, action_mode="command", config=config, plan=plan)
     policy = ScriptedPolicy(env)
     env.reset(seed=seed)

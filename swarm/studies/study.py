@@ -104,7 +104,8 @@ def run_study(
     folder is locked while the study writes it: a second study into it raises `FolderBusy`."""
     if backend not in backends.BACKENDS:
         raise SwarmError(f"study: backend {backend!r}, expected one of {list(backends.BACKENDS)}")
-    check_points(spec.mission_path, spec.sweeps)
+    at_once = (workers or backends.default_workers()) if backend == "local" else 1
+    check_points(spec.mission_path, spec.sweeps, at_once=at_once)
     with folder_lock(out):
         return _run_locked(spec, Path(out), backend, workers, address, progress)
 
