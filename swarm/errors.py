@@ -35,3 +35,12 @@ class FolderBusy(SwarmError):
         super().__init__(
             f"{self.folder}: in use by {holder}; wait for it to finish, or write to another folder"
         )
+
+
+class OutputError(SwarmError):
+    """An output could not be written (a full disk, a folder gone read-only); nothing partial is left."""
+
+    def __init__(self, path: str | Path, reason: str) -> None:
+        self.path = str(path)
+        self.reason = reason
+        super().__init__(f"{self.path}: could not write it ({reason}); nothing partial was left")

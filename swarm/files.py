@@ -18,7 +18,7 @@ from pathlib import Path
 
 import yaml
 
-from swarm.errors import FolderBusy, InputError, SwarmError
+from swarm.errors import FolderBusy, InputError, OutputError, SwarmError
 
 #: The lock file `folder_lock` keeps inside an output folder while a process writes it.
 LOCK_FILE = ".swarm.lock"
@@ -101,25 +101,33 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
     """Yield a temporary path beside `path`; on success it replaces `path`, on error it vanishes.
 
     The temporary name keeps the target's suffix, so writers that choose a format from the file
-    name (matplotlib, pyarrow) still do the right thing.
+    name (matplotlib, pyarrow) still do the right thing. A write that fails with an `OSError` (a
+    full disk: ENOSPC, EDQUOT) is an `OutputError` naming `path`, which is left as it was.
     """
     target = Path(path)
     tmp = target.with_name(f".{target.stem}.{os.getpid()}.{secrets.token_hex(4)}.tmp{target.suffix}")
     try:
         yield tmp
         os.replace(tmp, target)
-    except BaseException:
-        with contextlib.suppress(FileNotFoundError):
+    except BaseException as exc:
+        with contextlib.suppress(OSError):
             tmp.unlink()
+        if isinstance(exc, OSError):
+            raise OutputError(target, exc.strerror or str(exc).splitlines()[0]) from None
         raise
+
+
+def write_bytes_atomic(path: str | os.PathLike[str], data: bytes) -> None:
+    """Write bytes (fsynced) so a reader sees all of them or the old file."""
+    with atomic_path(path) as tmp, open(tmp, "xb") as fh:
+        fh.write(data)
+        fh.flush()
+        os.fsync(fh.fileno())
 
 
 def write_text_atomic(path: str | os.PathLike[str], text: str) -> None:
     """Write text (UTF-8, LF newlines, fsynced) so a reader sees all of it or the old file."""
-    with atomic_path(path) as tmp, open(tmp, "x", encoding="utf-8", newline="\n") as fh:
-        fh.write(text)
-        fh.flush()
-        os.fsync(fh.fileno())
+    write_bytes_atomic(path, text.encode("utf-8"))
 
 
 def read_text(path: str | os.PathLike[str], what: str) -> str:

@@ -3,6 +3,7 @@ nothing; a holder killed with SIGKILL leaves the folder free; nested holds in on
 
 from __future__ import annotations
 
+import errno
 import os
 import signal
 import subprocess
@@ -11,8 +12,9 @@ from pathlib import Path
 
 import pytest
 
-from swarm.errors import FolderBusy
-from swarm.files import LOCK_FILE, folder_lock
+from swarm import files
+from swarm.errors import FolderBusy, OutputError
+from swarm.files import LOCK_FILE, folder_lock, write_text_atomic
 
 HOLD = """
 import sys
@@ -75,3 +77,19 @@ def test_nested_holds_in_one_process_and_an_unused_new_folder_is_removed(tmp_pat
     with folder_lock(out, "writes"):
         (out / "plan.json").write_text("{}")
     assert sorted(p.name for p in out.iterdir()) == ["plan.json"]
+
+
+def test_a_full_disk_is_one_line_and_leaves_the_old_file(tmp_path, monkeypatch) -> None:
+    target = tmp_path / "plan.json"
+    target.write_text("the old plan\n")
+
+    def full(_fd: int) -> None:
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+    monkeypatch.setattr(files.os, "fsync", full)
+    with pytest.raises(OutputError) as caught:
+        write_text_atomic(target, "a new plan\n" * 1000)
+    reason = "No space left on device"
+    assert str(caught.value) == f"{target}: could not write it ({reason}); nothing partial was left"
+    assert target.read_text() == "the old plan\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["plan.json"]  # no temporary file

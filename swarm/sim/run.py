@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from swarm.errors import InputError
-from swarm.files import atomic_path, read_npz, read_text, write_text_atomic
+from swarm.files import read_npz, read_text, write_bytes_atomic, write_text_atomic
 from swarm.mission.plan import MissionPlan
 from swarm.mission.schema import Mission
 from swarm.sim.env import SimConfig, SwarmEnv
@@ -203,8 +203,7 @@ def write_log(log: MissionLog, out_dir: str | Path) -> dict[str, Path]:
         objects_m=log.objects_m,
         object_mine=log.object_mine,
     )
-    with atomic_path(paths["trajectories.npz"]) as tmp:
-        Path(tmp).write_bytes(buf.getvalue())
+    write_bytes_atomic(paths["trajectories.npz"], buf.getvalue())
     write_text_atomic(
         paths["events.jsonl"], "".join(json.dumps(ev, sort_keys=True) + "\n" for ev in log.events)
     )

@@ -330,3 +330,40 @@ def test_two_studies_into_one_folder_one_proceeds_and_no_row_is_doubled(tmp_path
     assert keys == [(0, 0), (0, 1), (0, 2)]
     summary = json.loads((out / "summary.json").read_text())
     assert summary["runs"] == 3 and summary["points"][0]["runs"] == 3
+
+
+@pytest.mark.slow
+def test_a_full_disk_stops_the_study_in_one_line_and_keeps_only_whole_parts(
+    reference, tmp_path, monkeypatch
+) -> None:
+    """The disk fills while the third chunk is written: one line, two whole parts, no temporary
+    files; once there is room again the same study finishes with the uninterrupted table."""
+    import errno
+
+    from swarm.errors import OutputError
+    from swarm.studies import store
+
+    spec, expected = reference
+    out = tmp_path / "full"
+    write_table = store.pq.write_table
+    calls = []
+
+    def filling(table, where, *args, **kwargs):
+        calls.append(where)
+        if len(calls) >= 3:
+            Path(where).write_bytes(b"PAR1 half a part")  # what reached the disk before it filled
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        return write_table(table, where, *args, **kwargs)
+
+    monkeypatch.setattr(store.pq, "write_table", filling)
+    with pytest.raises(OutputError) as caught:
+        run_study(spec, out, workers=1)
+    message = str(caught.value)
+    assert "\n" not in message and "No space left on device" in message
+    assert sorted(p.name for p in (out / "parts").iterdir()) == ["part-000000.parquet", "part-000001.parquet"]
+    assert pq.read_table(out / "parts").num_rows == 4  # chunks of 2 runs, each whole
+    assert not (out / "results.parquet").exists()
+    monkeypatch.setattr(store.pq, "write_table", write_table)
+    table, summary = run_study(spec, out, workers=1)
+    assert _stable(table).equals(_stable(expected))
+    assert summary["runs"] == 10
