@@ -13,7 +13,7 @@ import shapely
 import yaml
 from shapely.geometry import LineString, MultiPolygon, Point, Polygon, box
 
-from swarm.errors import InputError
+from swarm.errors import InputError, OutputError
 from swarm.world import BeachMap, Region, load_map, save_map
 from swarm.world.io import (
     DEM_CLASSES,
@@ -655,7 +655,10 @@ def test_failed_save_leaves_the_old_map_and_no_temp_files(tmp_path, monkeypatch)
         raise OSError(28, "No space left on device")
 
     monkeypatch.setattr(np, "savez_compressed", broken)
-    with pytest.raises(OSError):
+    with pytest.raises(OutputError) as err:
         save_map(make_map(seed=2), path)
+    assert str(err.value) == (
+        f"{tmp_path / 'm.npz'}: could not write it (No space left on device); nothing partial was left"
+    )
     assert {p.name: p.read_bytes() for p in tmp_path.iterdir()} == before
     same_map(make_map(seed=1), load_map(path))
