@@ -156,7 +156,7 @@ def read_npz(path: str | os.PathLike[str], expected: str) -> dict[str, object]:
     if not whole:  # a truncated archive has lost its central directory, at the end
         raise InputError(path, "(file)", f"{size} bytes that are not a whole zip archive", expected)
     try:
-        with np.load(path, allow_pickle=False) as npz:
+        with open(path, "rb") as fh, np.load(fh, allow_pickle=False) as npz:  # numpy leaks a file it opens
             return {k: npz[k] for k in npz.files}
     except (
         OSError,

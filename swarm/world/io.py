@@ -181,8 +181,11 @@ def _check_geometry(
         raise InputError(source, where, "3-D coordinates", "2-D [x, y] coordinates (metres)")
     if not np.isfinite(shapely.get_coordinates(geom)).all():
         raise InputError(source, where, "non-finite coordinates", "finite [x, y] coordinates (metres)")
-    if not geom.is_valid:
-        raise InputError(source, where, explain_validity(geom), "a valid geometry (shapely is_valid)")
+    with np.errstate(all="ignore"):  # GEOS on coordinates near the float limit: the bounds refuse them
+        valid = geom.is_valid
+        reason = None if valid else explain_validity(geom)
+    if not valid:
+        raise InputError(source, where, reason, "a valid geometry (shapely is_valid)")
     if bounds is not None and not box(*bounds).covers(geom):
         found = "extent (" + ", ".join(f"{b:g}" for b in geom.bounds) + ")"
         expected = "a region inside the map bounds (" + ", ".join(f"{b:g}" for b in bounds) + ")"

@@ -50,8 +50,9 @@ EXAMPLES = {
 
 
 SCALE = int(os.environ.get("SWARM_FUZZ_SCALE", "1"))
-#: Each test runs a few hundred loads: seconds, not minutes; CI runs them with the slow tests.
-pytestmark = pytest.mark.slow
+#: Each test runs a few hundred loads: seconds, not minutes; CI runs them with the slow tests. A
+#: warning would be lines on stderr beside the one-line error: it fails the test too.
+pytestmark = [pytest.mark.slow, pytest.mark.filterwarnings("error")]
 
 
 def fuzz(kind: str):
