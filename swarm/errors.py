@@ -37,10 +37,12 @@ class FolderBusy(SwarmError):
         )
 
 
-class OutputError(SwarmError):
-    """An output could not be written (a full disk, a folder gone read-only); nothing partial is left."""
+class OutputError(SwarmError, OSError):
+    """An output could not be written (a full disk, a folder gone read-only); nothing partial is
+    left. Still an `OSError`, for callers of the library that catch one."""
 
-    def __init__(self, path: str | Path, reason: str) -> None:
+    def __init__(self, path: str | Path, reason: str, errno: int | None = None) -> None:
         self.path = str(path)
         self.reason = reason
         super().__init__(f"{self.path}: could not write it ({reason}); nothing partial was left")
+        self.errno, self.strerror, self.filename = errno, reason, self.path

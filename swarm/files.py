@@ -113,7 +113,7 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
         with contextlib.suppress(OSError):
             tmp.unlink()
         if isinstance(exc, OSError):
-            raise OutputError(target, exc.strerror or str(exc).splitlines()[0]) from None
+            raise OutputError(target, exc.strerror or str(exc).splitlines()[0], exc.errno) from None
         raise
 
 
