@@ -46,3 +46,6 @@ class OutputError(SwarmError, OSError):
         self.reason = reason
         super().__init__(f"{self.path}: could not write it ({reason}); nothing partial was left")
         self.errno, self.strerror, self.filename = errno, reason, self.path
+
+    def __str__(self) -> str:  # not OSError's "[Errno N] ..." form
+        return str(self.args[0])
