@@ -367,3 +367,49 @@ def test_a_full_disk_stops_the_study_in_one_line_and_keeps_only_whole_parts(
     table, summary = run_study(spec, out, workers=1)
     assert _stable(table).equals(_stable(expected))
     assert summary["runs"] == 10
+
+
+def _descendants(pid: int) -> set[int]:
+    """Processes below `pid` (from /proc): only those this test started may be killed."""
+    parent: dict[int, int] = {}
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        with contextlib.suppress(OSError, ValueError, IndexError):
+            parent[int(stat.parent.name)] = int(stat.read_text().rsplit(")", 1)[1].split()[1])
+    out: set[int] = set()
+    frontier = {pid}
+    while frontier:
+        frontier = {c for c, p in parent.items() if p in frontier} - out
+        out |= frontier
+    return out
+
+
+@pytest.mark.slow
+def test_a_ray_worker_killed_mid_study_is_retried_to_the_same_table(reference, tmp_path) -> None:
+    """kill -9 the Ray worker running a run: Ray runs it again and the table is the same."""
+    pytest.importorskip("ray")  # the `ray` extra; CI installs it
+    import threading
+
+    spec, expected = reference
+    killed: list[int] = []
+    stop = threading.Event()
+
+    def kill_one_worker() -> None:
+        while not stop.is_set() and not killed:
+            for pid in _descendants(os.getpid()):
+                with contextlib.suppress(OSError):
+                    if Path(f"/proc/{pid}/cmdline").read_bytes().startswith(b"ray::run_task"):
+                        os.kill(pid, signal.SIGKILL)
+                        killed.append(pid)
+                        break
+            time.sleep(0.02)
+
+    killer = threading.Thread(target=kill_one_worker, daemon=True)
+    killer.start()
+    try:
+        table, summary = run_study(spec, tmp_path / "ray", backend="ray", workers=2)
+    finally:
+        stop.set()
+        killer.join()
+    assert killed, "no Ray worker was running a run to kill"
+    assert summary["runs"] == 10
+    assert _stable(table).equals(_stable(expected))
