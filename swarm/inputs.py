@@ -3,8 +3,8 @@ pydantic model per kind of file, and one translation of pydantic's errors into t
 line, `FILE: KEY.PATH: found X, expected Y` (`InputError`).
 
 ```python
-profile = load_model("planners/fast.yaml", ProfileFile, "planner profile YAML file")
-mission = validate(Mission, data, "missions/x.yaml")   # InputError on the first problem
+header = load_model("maps/test_small.yaml", MapFile, "map YAML file")  # read strictly, then validate
+profile = validate(ProfileFile, data, "planners/x.yaml")     # InputError on the first problem
 ```
 
 Models subclass `InputModel`: unknown keys refused, no type coercion, no NaN or infinities, and an

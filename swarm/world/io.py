@@ -54,8 +54,8 @@ from shapely.geometry.base import BaseGeometry
 from shapely.validation import explain_validity
 
 from swarm.errors import InputError
-from swarm.files import atomic_path, read_json, read_npz, read_text, read_yaml, write_text_atomic
-from swarm.inputs import XY, InputModel, expected, validate
+from swarm.files import atomic_path, read_json, read_npz, read_text, write_text_atomic
+from swarm.inputs import XY, InputModel, expected, load_model
 from swarm.robot.terrain import TerrainLibrary, load_library
 from swarm.world.beachmap import REGION_KINDS, BeachMap, Region
 
@@ -331,7 +331,7 @@ def load_map(path: str | Path, library: TerrainLibrary | None = None) -> BeachMa
     docstring). Terrain classes must be modes of `library` (default: `load_library()`, the bundled
     modes)."""
     path = Path(path)
-    f = validate(MapFile, read_yaml(path, "map YAML file"), path)
+    f = load_model(path, MapFile, "map YAML file")
     library = load_library() if library is None else library
     for i, cls in enumerate(f.terrain_classes):
         if cls not in library:
