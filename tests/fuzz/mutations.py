@@ -122,3 +122,33 @@ def mutated_bytes(draw: Callable, original: bytes) -> bytes:
     if how == "random_bytes":
         return draw(st.binary(max_size=400))
     return b""
+
+
+#: Tokens that replace a number of a whitespace-separated table (a DEM, an encoder log).
+ODD_TOKENS = ("nan", "inf", "-inf", "1e400", "-1", "0", "x", "999999999999", "1.5", "", "ncols", "0x10")
+
+
+@st.composite
+def mutated_table(draw: Callable, original: str) -> bytes:
+    """A whitespace-separated table with one token swapped for an odd one, or cut, repeated and
+    overwritten line by line like any text."""
+    if draw(st.booleans()):
+        tokens = original.split(" ")
+        i = draw(st.integers(0, len(tokens) - 1))
+        tail = "\n" if tokens[i].endswith("\n") else ""
+        tokens[i] = draw(st.sampled_from(ODD_TOKENS)) + tail
+        return " ".join(tokens).encode()
+    how = draw(st.sampled_from(("truncate", "random_bytes", "flip_bytes", "repeat_line", "drop_line")))
+    data = original.encode("utf-8")
+    if how == "truncate":
+        return data[: draw(st.integers(0, max(0, len(data) - 1)))]
+    if how == "random_bytes":
+        return draw(st.binary(max_size=200))
+    if how == "flip_bytes":
+        return _flip(draw, data)
+    lines = original.splitlines(keepends=True)
+    i = draw(st.integers(0, len(lines) - 1))
+    if how == "drop_line":
+        return "".join(lines[:i] + lines[i + 1 :]).encode()
+    j = draw(st.integers(0, len(lines)))
+    return "".join([*lines[:j], lines[i], *lines[j:]]).encode()

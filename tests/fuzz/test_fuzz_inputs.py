@@ -23,7 +23,7 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-from mutations import mutated_bytes, mutated_text
+from mutations import mutated_bytes, mutated_table, mutated_text
 
 from swarm.errors import SwarmError
 from swarm.mission import read_mission_yaml
@@ -44,6 +44,7 @@ EXAMPLES = {
     "terrain": 300,
     "grid": 300,
     "dem": 300,
+    "robot run": 300,
     "study.json": 200,
     "plan.json": 200,
 }
@@ -228,25 +229,34 @@ NODATA_value -9999
 """
 
 
-@st.composite
-def mutated_dem(draw) -> bytes:
-    """The DEM text mutated line by line, or a number swapped for an odd token."""
-    if draw(st.booleans()):
-        tokens = DEM.split(" ")
-        i = draw(st.integers(0, len(tokens) - 1))
-        tail = "\n" if tokens[i].endswith("\n") else ""
-        odd = ["nan", "inf", "-inf", "1e400", "-1", "0", "x", "999999999", "1.5", "", "ncols"]
-        tokens[i] = draw(st.sampled_from(odd)) + tail
-        return " ".join(tokens).encode()
-    return draw(mutated_text(DEM))
-
-
 @fuzz("dem")
-@given(text=mutated_dem(), fill=st.sampled_from([None, 0.0]))
+@given(text=mutated_table(DEM), fill=st.sampled_from([None, 0.0]))
 def test_dems(work: Path, text: bytes, fill: float | None) -> None:
     path = work / "dem.asc"
     path.write_bytes(text)
     only_our_error(lambda p: read_esri_ascii(p, fill=fill), path)
+
+
+RUNS = DATA / "robot-runs"
+#: The first 40 rows of a shipped run of each format, and its reader (`swarm model validate`).
+ROBOT_RUNS = {
+    "encoders.txt": ("concrete_straight_encoders.txt", "read_encoders"),
+    "truth.txt": ("concrete_straight_truth.txt", "read_truth"),
+    "run.ssv": ("concrete_straight.ssv", "read_ssv"),
+}
+
+
+@fuzz("robot run")
+@given(data=st.data())
+def test_robot_runs(work: Path, data) -> None:
+    import swarm.robot.io as robot_io
+
+    name = data.draw(st.sampled_from(sorted(ROBOT_RUNS)), label="format")
+    source, reader = ROBOT_RUNS[name]
+    original = "".join((RUNS / source).read_text().splitlines(keepends=True)[:40])
+    path = work / name
+    path.write_bytes(data.draw(mutated_table(original), label="file"))
+    only_our_error(getattr(robot_io, reader), path)
 
 
 # --- files swarm wrote and reads back (swarm report, a resumed study) ----------------------------------
