@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import sys
 from collections.abc import Sequence
@@ -171,6 +172,14 @@ def _check_folder(path: Path | None, option: str) -> None:
         )
 
 
+def _output_folder(folder: Path, args: argparse.Namespace):
+    """The lock on an output folder while this command writes it (`swarm.files.folder_lock`): a
+    second swarm process writing the same folder stops with one line naming the holder."""
+    from swarm.files import folder_lock
+
+    return folder_lock(folder, getattr(args, "command_line", None))
+
+
 def _choose_mode(args: argparse.Namespace):
     from swarm.files import read_yaml
     from swarm.robot.terrain import default_library, library_from_dict
@@ -275,7 +284,11 @@ def _cmd_validate(args: argparse.Namespace) -> int:
             terrain=mode.name,
             robot=str(args.robot),
         )
-        written = {**write_validation(args.out, v), **validation_report(v, date=today()).write_all(args.out)}
+        with _output_folder(args.out, args):
+            written = {
+                **write_validation(args.out, v),
+                **validation_report(v, date=today()).write_all(args.out),
+            }
     if args.json:
         out = scores[args.model].as_dict()
         if args.compare:
@@ -580,6 +593,7 @@ def _cmd_plan(args: argparse.Namespace) -> int:
     from swarm.mission.plan import plan_mission, write_plan
     from swarm.report.document import today
     from swarm.report.plan_report import summary_rows, write_plan_report
+    from swarm.sim.memory import check_fits
 
     if args.seed is not None and args.seed < 0:
         raise InputError("command line", "--seed", args.seed, "a seed >= 0")
@@ -593,61 +607,63 @@ def _cmd_plan(args: argparse.Namespace) -> int:
     if not args.mission.is_file():
         raise InputError("command line", "MISSION.yaml", str(args.mission), "an existing mission YAML file")
     mission = load_mission(args.mission, overrides, overrides_source="--set")
+    check_fits(mission, simulate=bool(args.evaluate), at_once=1)
     out = args.out or Path("reports") / f"{mission.name}-{time.strftime('%Y%m%d-%H%M%S')}"
     if out.exists() and not out.is_dir():
         raise InputError("command line", "--out", str(out), "a folder (this is a file)")
-    with tqdm(desc="planning routes", unit="route", file=sys.stderr, leave=False) as bar:
+    with _output_folder(out, args):
+        with tqdm(desc="planning routes", unit="route", file=sys.stderr, leave=False) as bar:
 
-        def progress(done: int, total: int) -> None:
-            bar.total = total
-            bar.n = done
-            bar.refresh()
-
-        seed = mission.seed if args.seed is None else args.seed
-        plan = plan_mission(mission, seed=seed, progress=progress, workers=args.workers)
-    paths = write_plan(plan, out)
-    evaluation = None
-    if args.evaluate:
-        from swarm.studies.evaluate import EVALUATION_FILE, evaluate_plan
-
-        with tqdm(desc="evaluating", unit="run", file=sys.stderr, leave=False) as bar:
-
-            def run_progress(done: int, total: int) -> None:
+            def progress(done: int, total: int) -> None:
                 bar.total = total
                 bar.n = done
                 bar.refresh()
 
-            evaluation = evaluate_plan(
-                args.mission,
-                out,
-                runs=args.evaluate,
-                count=mission.swarm.count,
-                overrides=overrides,
-                plan_seed=args.seed,
-                target=args.target,
-                workers=args.workers,
-                progress=run_progress,
-            )
-        paths[EVALUATION_FILE] = out / EVALUATION_FILE
-    paths.update(write_plan_report(plan, out, date=today(), evaluation=evaluation))
-    print(f"plan for {plan.mission} on {plan.map}, seed {plan.seed}")
-    rows = summary_rows(plan)
-    width = max(len(k) for k, _ in rows)
-    for key, value in rows:
-        print(f"  {key.ljust(width)}  {value}")
-    if evaluation is not None:
-        said = [
-            f"P(success) {evaluation['success_rate']:.2f} over {evaluation['runs']} runs "
-            f"({evaluation['wilson_low']:.2f} to {evaluation['wilson_high']:.2f}), "
-            f"target {evaluation['target']:g}"
-        ]
-        if evaluation.get("suggested_count"):
-            said.append(f"suggested size {evaluation['suggested_count']}")
-        if evaluation.get("runs_needed"):
-            said.append(f"about {evaluation['runs_needed']} runs would show it")
-        print(f"  {'in simulation'.ljust(width)}  " + "; ".join(said))
-    print(f"wrote {', '.join(p.name for p in paths.values())} in {out}")
-    return 0
+            seed = mission.seed if args.seed is None else args.seed
+            plan = plan_mission(mission, seed=seed, progress=progress, workers=args.workers)
+        paths = write_plan(plan, out)
+        evaluation = None
+        if args.evaluate:
+            from swarm.studies.evaluate import EVALUATION_FILE, evaluate_plan
+
+            with tqdm(desc="evaluating", unit="run", file=sys.stderr, leave=False) as bar:
+
+                def run_progress(done: int, total: int) -> None:
+                    bar.total = total
+                    bar.n = done
+                    bar.refresh()
+
+                evaluation = evaluate_plan(
+                    args.mission,
+                    out,
+                    runs=args.evaluate,
+                    count=mission.swarm.count,
+                    overrides=overrides,
+                    plan_seed=args.seed,
+                    target=args.target,
+                    workers=args.workers,
+                    progress=run_progress,
+                )
+            paths[EVALUATION_FILE] = out / EVALUATION_FILE
+        paths.update(write_plan_report(plan, out, date=today(), evaluation=evaluation))
+        print(f"plan for {plan.mission} on {plan.map}, seed {plan.seed}")
+        rows = summary_rows(plan)
+        width = max(len(k) for k, _ in rows)
+        for key, value in rows:
+            print(f"  {key.ljust(width)}  {value}")
+        if evaluation is not None:
+            said = [
+                f"P(success) {evaluation['success_rate']:.2f} over {evaluation['runs']} runs "
+                f"({evaluation['wilson_low']:.2f} to {evaluation['wilson_high']:.2f}), "
+                f"target {evaluation['target']:g}"
+            ]
+            if evaluation.get("suggested_count"):
+                said.append(f"suggested size {evaluation['suggested_count']}")
+            if evaluation.get("runs_needed"):
+                said.append(f"about {evaluation['runs_needed']} runs would show it")
+            print(f"  {'in simulation'.ljust(width)}  " + "; ".join(said))
+        print(f"wrote {', '.join(p.name for p in paths.values())} in {out}")
+        return 0
 
 
 # --- swarm simulate: one mission run (swarm/sim) --------------------------------------------------------
@@ -722,6 +738,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     from swarm.mission.plan import plan_mission, write_plan
     from swarm.report.document import today
     from swarm.report.sim_report import criteria_rows, end_state_rows, loss_rows, verdict, write_sim_report
+    from swarm.sim.memory import check_fits
     from swarm.sim.render import Animator, check_animation_path
     from swarm.sim.run import simulate, write_log
 
@@ -738,61 +755,63 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     if not args.mission.is_file():
         raise InputError("command line", "MISSION.yaml", str(args.mission), "an existing mission YAML file")
     mission = load_mission(args.mission, overrides, overrides_source="--set")
+    check_fits(mission)  # before planning, which needs most of it
     out = args.out or Path("reports") / f"{mission.name}-sim-{time.strftime('%Y%m%d-%H%M%S')}"
     if out.exists() and not out.is_dir():
         raise InputError("command line", "--out", str(out), "a folder (this is a file)")
-    seed = mission.seed if args.seed is None else args.seed
+    with _output_folder(out, args):
+        seed = mission.seed if args.seed is None else args.seed
 
-    with tqdm(desc="planning routes", unit="route", file=sys.stderr, leave=False) as bar:
+        with tqdm(desc="planning routes", unit="route", file=sys.stderr, leave=False) as bar:
 
-        def plan_progress(done: int, total: int) -> None:
-            bar.total = total
-            bar.n = done
-            bar.refresh()
+            def plan_progress(done: int, total: int) -> None:
+                bar.total = total
+                bar.n = done
+                bar.refresh()
 
-        plan_seed = mission.seed if args.plan_seed is None else args.plan_seed
-        plan = plan_mission(mission, seed=plan_seed, progress=plan_progress, workers=args.workers)
+            plan_seed = mission.seed if args.plan_seed is None else args.plan_seed
+            plan = plan_mission(mission, seed=plan_seed, progress=plan_progress, workers=args.workers)
 
-    with tqdm(desc="simulating", unit="s", file=sys.stderr, leave=False) as bar:
+        with tqdm(desc="simulating", unit="s", file=sys.stderr, leave=False) as bar:
 
-        def sim_progress(t_s: float, limit_s: float) -> None:
-            if bar.total is None:
-                bar.total = round(limit_s)
-            bar.update(round(t_s) - bar.n)
+            def sim_progress(t_s: float, limit_s: float) -> None:
+                if bar.total is None:
+                    bar.total = round(limit_s)
+                bar.update(round(t_s) - bar.n)
 
-        if args.animate is None:
-            log = simulate(mission, seed, plan=plan, progress=sim_progress)
-        else:
-            args.animate.parent.mkdir(parents=True, exist_ok=True)  # may be the output folder
-            with Animator(args.animate) as anim:
-                log = simulate(mission, seed, plan=plan, progress=sim_progress, on_step=anim.on_step)
+            if args.animate is None:
+                log = simulate(mission, seed, plan=plan, progress=sim_progress)
+            else:
+                args.animate.parent.mkdir(parents=True, exist_ok=True)  # may be the output folder
+                with Animator(args.animate) as anim:
+                    log = simulate(mission, seed, plan=plan, progress=sim_progress, on_step=anim.on_step)
 
-    paths = {**write_plan(plan, out), **write_log(log, out), **write_sim_report(log, out, date=today())}
-    s = log.summary()
-    print(
-        f"simulated {log.mission} on {log.map}, seed {log.seed}: {s['robots']} robots, "
-        f"{s['duration_s']:.0f} s of mission time"
-    )
-    print()
-    print(_table([r[:1] + r[2:] for r in criteria_rows(log.outcome)]))
-    print()
-    if log.losses:
-        print(_table(loss_rows(log)))
-    else:
-        print("no robots lost")
-    print()
-    print(_table(end_state_rows(log)))
-    if s["mines"] or s["false_alarms"]:
+        paths = {**write_plan(plan, out), **write_log(log, out), **write_sim_report(log, out, date=today())}
+        s = log.summary()
         print(
-            f"mines: {s['mines_detected']} of {s['mines']} detected, {s['mines_cleared']} cleared, "
-            f"{s['false_alarms']} false alarms"
+            f"simulated {log.mission} on {log.map}, seed {log.seed}: {s['robots']} robots, "
+            f"{s['duration_s']:.0f} s of mission time"
         )
-    print()
-    print(verdict(log.outcome))
-    print(f"wrote {', '.join(sorted(p.name for p in paths.values()))} in {out}")
-    if args.animate is not None:
-        print(f"animation: {args.animate} ({anim.frames} frames at {anim.fps:g} fps)")
-    return 0
+        print()
+        print(_table([r[:1] + r[2:] for r in criteria_rows(log.outcome)]))
+        print()
+        if log.losses:
+            print(_table(loss_rows(log)))
+        else:
+            print("no robots lost")
+        print()
+        print(_table(end_state_rows(log)))
+        if s["mines"] or s["false_alarms"]:
+            print(
+                f"mines: {s['mines_detected']} of {s['mines']} detected, {s['mines_cleared']} cleared, "
+                f"{s['false_alarms']} false alarms"
+            )
+        print()
+        print(verdict(log.outcome))
+        print(f"wrote {', '.join(sorted(p.name for p in paths.values()))} in {out}")
+        if args.animate is not None:
+            print(f"animation: {args.animate} ({anim.frames} frames at {anim.fps:g} fps)")
+        return 0
 
 
 def _xy_arg(option: str, value: str | None) -> tuple[float, float] | None:
@@ -963,6 +982,7 @@ def _cmd_study(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
     from swarm.report.study_report import answer, study_rows, write_study_report
+    from swarm.studies.backends import default_workers
     from swarm.studies.study import StudySpec, run_study
     from swarm.studies.sweep import Sweep, check_points, parse_sweeps
 
@@ -993,35 +1013,38 @@ def _cmd_study(args: argparse.Namespace) -> int:
     out = args.out or Path("reports") / f"{args.mission.stem}-study"
     if out.exists() and not out.is_dir():
         raise InputError("command line", "--out", str(out), "a folder (this is a file)")
-    spec = StudySpec(str(args.mission), args.runs, sweeps, args.seed, args.target, args.confidence)
-    check_points(spec.mission_path, sweeps)  # every point valid before anything starts
+    with _output_folder(out, args):
+        spec = StudySpec(str(args.mission), args.runs, sweeps, args.seed, args.target, args.confidence)
+        # every point valid, and fitting in memory, before anything starts
+        local = args.backend == "local"  # Ray's workers have their own machines' memory
+        check_points(spec.mission_path, sweeps, at_once=(args.workers or default_workers()) if local else 1)
 
-    with tqdm(desc="study", unit="run", file=sys.stderr, dynamic_ncols=True) as bar:
+        with tqdm(desc="study", unit="run", file=sys.stderr, dynamic_ncols=True) as bar:
 
-        def progress(done: int, total: int) -> None:
-            if bar.total is None:
-                bar.total = total
-                bar.initial = bar.n = done
-                bar.refresh()
-            else:
-                bar.update(done - bar.n)
+            def progress(done: int, total: int) -> None:
+                if bar.total is None:
+                    bar.total = total
+                    bar.initial = bar.n = done
+                    bar.refresh()
+                else:
+                    bar.update(done - bar.n)
 
-        table, summary = run_study(
-            spec, out, backend=args.backend, workers=args.workers, address=args.address, progress=progress
-        )
-    from swarm.mission.load import load_mission
+            table, summary = run_study(
+                spec, out, backend=args.backend, workers=args.workers, address=args.address, progress=progress
+            )
+        from swarm.mission.load import load_mission
 
-    beach = load_mission(args.mission).beach_map
-    paths = write_study_report(out, table, summary, beach)
-    print(answer(summary))
-    print()
-    print(_table(study_rows(summary)))
-    if summary["losses_by_cause"]:
+        beach = load_mission(args.mission).beach_map
+        paths = write_study_report(out, table, summary, beach)
+        print(answer(summary))
         print()
-        print("losses: " + ", ".join(f"{c} {n}" for c, n in summary["losses_by_cause"].items()))
-    names = ["results.parquet", "summary.json", *(p.name for p in paths.values())]
-    print(f"wrote {', '.join(names)} in {out}")
-    return 0
+        print(_table(study_rows(summary)))
+        if summary["losses_by_cause"]:
+            print()
+            print("losses: " + ", ".join(f"{c} {n}" for c, n in summary["losses_by_cause"].items()))
+        names = ["results.parquet", "summary.json", *(p.name for p in paths.values())]
+        print(f"wrote {', '.join(names)} in {out}")
+        return 0
 
 
 # --- swarm report: a report from a plan, a simulation log, a study or a validation (swarm/report) -----------
@@ -1088,14 +1111,16 @@ def _cmd_report(args: argparse.Namespace) -> int:
             raise InputError(
                 "command line", "PATH", str(folder), "a folder this user may write the report in (or -o)"
             )
-    report = report_for(args.path, date=today())
-    if to_stdout:
-        sys.stdout.write(report.render(fmt))
-        return 0
-    try:
-        report.write(out, fmt)
-    except OSError as exc:
-        raise InputError("command line", "-o", str(out), f"a writable file ({exc.strerror})") from None
+    into_folder = out is not None and out.resolve().parent == folder.resolve()
+    with _output_folder(folder, args) if into_folder else contextlib.nullcontext():
+        report = report_for(args.path, date=today())
+        if to_stdout:
+            sys.stdout.write(report.render(fmt))
+            return 0
+        try:
+            report.write(out, fmt)
+        except OSError as exc:
+            raise InputError("command line", "-o", str(out), f"a writable file ({exc.strerror})") from None
     print(out)
     return 0
 
@@ -1109,6 +1134,7 @@ def _cmd_schema(_args: argparse.Namespace) -> int:
 
 def main(argv: Sequence[str] | None = None) -> int:
     args = _parser().parse_args(argv)
+    args.command_line = " ".join(["swarm", *(sys.argv[1:] if argv is None else argv)])
     try:
         return args.handler(args)
     except SwarmError as exc:

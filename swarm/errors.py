@@ -24,3 +24,28 @@ class InputError(SwarmError):
         self.found = found
         self.expected = expected
         super().__init__(f"{self.source}: {where}: found {found!r}, expected {expected}")
+
+
+class FolderBusy(SwarmError):
+    """Another process holds the lock on an output folder (`swarm.files.folder_lock`)."""
+
+    def __init__(self, folder: str | Path, holder: str) -> None:
+        self.folder = str(folder)
+        self.holder = holder
+        super().__init__(
+            f"{self.folder}: in use by {holder}; wait for it to finish, or write to another folder"
+        )
+
+
+class OutputError(SwarmError, OSError):
+    """An output could not be written (a full disk, a folder gone read-only); nothing partial is
+    left. Still an `OSError`, for callers of the library that catch one."""
+
+    def __init__(self, path: str | Path, reason: str, errno: int | None = None) -> None:
+        self.path = str(path)
+        self.reason = reason
+        super().__init__(f"{self.path}: could not write it ({reason}); nothing partial was left")
+        self.errno, self.strerror, self.filename = errno, reason, self.path
+
+    def __str__(self) -> str:  # not OSError's "[Errno N] ..." form
+        return str(self.args[0])

@@ -1,16 +1,99 @@
-"""Writing outputs so nothing is ever half-written: a temporary name beside the target, then a rename."""
+"""Writing outputs so nothing is ever half-written (a temporary name beside the target, then a
+rename) and no two processes write one folder (`folder_lock`); reading inputs with one-line errors."""
 
 from __future__ import annotations
 
 import contextlib
+import errno
+import fcntl
+import json
 import os
+import re
 import secrets
+import sys
+import zipfile
+import zlib
 from collections.abc import Iterator
 from pathlib import Path
 
 import yaml
 
-from swarm.errors import InputError
+from swarm.errors import FolderBusy, InputError, OutputError, SwarmError
+
+#: The lock file `folder_lock` keeps inside an output folder while a process writes it.
+LOCK_FILE = ".swarm.lock"
+_held: dict[Path, int] = {}  # folders this process holds, and how many nested holds
+
+
+def _holder(fd: int) -> str:
+    """What the lock file says about the process holding it ("pid 1234 (swarm study ...)")."""
+    with contextlib.suppress(OSError):
+        text = os.pread(fd, 4096, 0).decode("utf-8", "replace").strip()
+        pid, _, command = text.partition(" ")
+        if pid.isdigit():
+            return f"pid {pid} ({command})" if command else f"pid {pid}"
+    return "another process"
+
+
+@contextlib.contextmanager
+def folder_lock(folder: str | os.PathLike[str], command: str | None = None) -> Iterator[Path]:
+    """Hold an exclusive lock on output folder `folder` (created if missing) while writing it.
+
+    The lock is `fcntl.flock` on `folder/.swarm.lock`, which records the holder's pid and command;
+    the kernel drops it when the process ends, however it ends, so a killed run never leaves the
+    folder locked. A second process gets `FolderBusy` naming the folder and the holder, having
+    changed nothing. Nested holds in one process are fine (the CLI and the library both lock). A
+    folder this call created and left empty is removed on release.
+    """
+    path = Path(folder)
+    key = path.resolve()
+    if key in _held:
+        _held[key] += 1
+        try:
+            yield path
+        finally:
+            _held[key] -= 1
+        return
+    created = not path.exists()
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise InputError(path, "(folder)", exc.strerror, "a folder this user may create and write") from None
+    lock = path / LOCK_FILE
+    while True:
+        try:
+            fd = os.open(lock, os.O_RDWR | os.O_CREAT | os.O_CLOEXEC, 0o644)
+        except OSError as exc:
+            raise InputError(path, "(folder)", exc.strerror, "a folder this user may write") from None
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError as exc:
+            holder = _holder(fd)
+            os.close(fd)
+            if exc.errno in (errno.EWOULDBLOCK, errno.EAGAIN):
+                raise FolderBusy(path, holder) from None
+            raise SwarmError(f"{path}: cannot lock the folder ({exc.strerror})") from None
+        try:  # the holder before us may have removed the file between our open and our lock
+            same = os.stat(lock).st_ino == os.fstat(fd).st_ino
+        except FileNotFoundError:
+            same = False
+        if same:
+            break
+        os.close(fd)
+    try:
+        text = f"{os.getpid()} {command or ' '.join([Path(sys.argv[0]).name, *sys.argv[1:]])}\n"
+        os.ftruncate(fd, 0)
+        os.pwrite(fd, text.encode("utf-8"), 0)
+        _held[key] = 1
+        yield path
+    finally:
+        _held.pop(key, None)
+        with contextlib.suppress(OSError):
+            lock.unlink()  # while still locked: a waiter that opened it retries on the new file
+        os.close(fd)
+        if created:
+            with contextlib.suppress(OSError):
+                path.rmdir()  # only if nothing was written in it
 
 
 @contextlib.contextmanager
@@ -18,25 +101,33 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
     """Yield a temporary path beside `path`; on success it replaces `path`, on error it vanishes.
 
     The temporary name keeps the target's suffix, so writers that choose a format from the file
-    name (matplotlib, pyarrow) still do the right thing.
+    name (matplotlib, pyarrow) still do the right thing. A write that fails with an `OSError` (a
+    full disk: ENOSPC, EDQUOT) is an `OutputError` naming `path`, which is left as it was.
     """
     target = Path(path)
     tmp = target.with_name(f".{target.stem}.{os.getpid()}.{secrets.token_hex(4)}.tmp{target.suffix}")
     try:
         yield tmp
         os.replace(tmp, target)
-    except BaseException:
-        with contextlib.suppress(FileNotFoundError):
+    except BaseException as exc:
+        with contextlib.suppress(OSError):
             tmp.unlink()
+        if isinstance(exc, OSError):
+            raise OutputError(target, exc.strerror or str(exc).splitlines()[0], exc.errno) from None
         raise
+
+
+def write_bytes_atomic(path: str | os.PathLike[str], data: bytes) -> None:
+    """Write bytes (fsynced) so a reader sees all of them or the old file."""
+    with atomic_path(path) as tmp, open(tmp, "xb") as fh:
+        fh.write(data)
+        fh.flush()
+        os.fsync(fh.fileno())
 
 
 def write_text_atomic(path: str | os.PathLike[str], text: str) -> None:
     """Write text (UTF-8, LF newlines, fsynced) so a reader sees all of it or the old file."""
-    with atomic_path(path) as tmp, open(tmp, "x", encoding="utf-8", newline="\n") as fh:
-        fh.write(text)
-        fh.flush()
-        os.fsync(fh.fileno())
+    write_bytes_atomic(path, text.encode("utf-8"))
 
 
 def read_text(path: str | os.PathLike[str], what: str) -> str:
@@ -49,10 +140,79 @@ def read_text(path: str | os.PathLike[str], what: str) -> str:
         raise InputError(path, "(file)", "bytes that are not UTF-8 text", f"a readable {what}") from None
 
 
-def parse_yaml(text: str, source: str | os.PathLike[str], loader: type = yaml.SafeLoader) -> object:
-    """YAML text to Python objects; a syntax error is an `InputError` naming the line."""
+def read_npz(path: str | os.PathLike[str], expected: str) -> dict[str, object]:
+    """The members of an `.npz` archive (arrays; a member that is not `.npy` comes back as bytes).
+    An empty, truncated, damaged or foreign file is one `InputError` naming it, saying `expected`."""
+    import numpy as np
+
+    path = Path(path)
+    try:
+        size = path.stat().st_size
+        whole = zipfile.is_zipfile(path)
+    except OSError as exc:
+        raise InputError(path, "(file)", exc.strerror, expected) from None
+    if size == 0:
+        raise InputError(path, "(file)", "an empty file", expected)
+    if not whole:  # a truncated archive has lost its central directory, at the end
+        raise InputError(path, "(file)", f"{size} bytes that are not a whole zip archive", expected)
+    try:
+        with open(path, "rb") as fh, np.load(fh, allow_pickle=False) as npz:  # numpy leaks a file it opens
+            return {k: npz[k] for k in npz.files}
+    except (
+        OSError,
+        ValueError,
+        EOFError,
+        KeyError,
+        zipfile.BadZipFile,
+        zlib.error,
+        NotImplementedError,  # a header naming a compression method zipfile does not have
+        RuntimeError,  # a header flagging the member as encrypted
+    ) as exc:
+        first = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise InputError(path, "(file)", f"a damaged archive ({first[:100]})", expected) from None
+    except MemoryError:
+        raise InputError(path, "(file)", "arrays larger than this machine's memory", expected) from None
+
+
+class _DuplicateKey(Exception):
+    def __init__(self, key: object, line: int) -> None:
+        super().__init__(key)
+        self.key, self.line = key, line
+
+
+class StrictLoader(yaml.SafeLoader):
+    """Safe YAML with duplicate keys refused and YAML 1.2 exponent floats (`2.4e9`, `1e5`, `2e4`;
+    YAML 1.1, PyYAML's default, reads those as strings)."""
+
+    def construct_mapping(self, node, deep=False):  # type: ignore[override]
+        self.flatten_mapping(node)
+        seen: set[object] = set()
+        for key_node, _ in node.value:
+            key = self.construct_object(key_node, deep=deep)
+            try:
+                duplicate = key in seen
+            except TypeError:  # unhashable keys: let the base class complain
+                break
+            if duplicate:
+                raise _DuplicateKey(key, key_node.start_mark.line + 1)
+            seen.add(key)
+        return super().construct_mapping(node, deep=deep)
+
+
+StrictLoader.add_implicit_resolver(
+    "tag:yaml.org,2002:float",
+    re.compile(r"^[-+]?[0-9][0-9_]*(?:\.[0-9_]*)?[eE][-+]?[0-9]+$"),
+    list("-+0123456789"),
+)
+
+
+def parse_yaml(text: str, source: str | os.PathLike[str], loader: type = StrictLoader) -> object:
+    """YAML text to Python objects (strictly: `StrictLoader`); a syntax error or a key given twice
+    in one mapping is an `InputError` naming the line."""
     try:
         return yaml.load(text, Loader=loader)
+    except _DuplicateKey as exc:
+        raise InputError(source, f"line {exc.line}", exc.key, "each key once in a mapping") from None
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         where = f"line {mark.line + 1}" if mark else "(file)"
@@ -64,3 +224,26 @@ def parse_yaml(text: str, source: str | os.PathLike[str], loader: type = yaml.Sa
 def read_yaml(path: str | os.PathLike[str], what: str) -> object:
     """Read and parse a YAML file with one-line errors for the user (what: 'robot YAML file')."""
     return parse_yaml(read_text(path, what), path)
+
+
+def _unique_keys(pairs: list[tuple[str, object]]) -> dict:
+    seen: dict[str, object] = {}
+    for key, value in pairs:
+        if key in seen:
+            raise _DuplicateKey(key, 0)
+        seen[key] = value
+    return seen
+
+
+def read_json(path: str | os.PathLike[str], what: str) -> object:
+    """Read and parse a JSON file with one-line errors: syntax (naming the line), a key given
+    twice in one object, or an unreadable file."""
+    text = read_text(path, what)
+    try:
+        return json.loads(text, object_pairs_hook=_unique_keys)
+    except json.JSONDecodeError as exc:
+        raise InputError(path, f"line {exc.lineno}", exc.msg, f"valid JSON ({what})") from None
+    except _DuplicateKey as exc:
+        raise InputError(path, "(a JSON object)", exc.key, "each key once in an object") from None
+    except RecursionError:
+        raise InputError(path, "(file)", "nesting too deep", f"valid JSON ({what})") from None

@@ -8,13 +8,12 @@ mission.tasks[0].zones, mission.beach_map.regions["landing_a"], mission.hazards.
 ```
 """
 
+from swarm.inputs import key_path, unit_of
 from swarm.mission.load import (
     apply_overrides,
-    key_path,
     load_mission,
     mission_from_dict,
     read_mission_yaml,
-    unit_of,
 )
 from swarm.mission.schema import (
     PLATFORM_OFFSHORE_M,

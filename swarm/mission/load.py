@@ -27,289 +27,33 @@ from __future__ import annotations
 
 import copy
 import os
-import re
-import types
 from collections.abc import Mapping, Sequence
 from importlib import resources
 from pathlib import Path
-from typing import Annotated, Any, Literal, Union, get_args, get_origin
+from typing import Any
 
-import yaml
-from pydantic import BaseModel, ValidationError
+from pydantic import ValidationError
 
 from swarm.errors import InputError
-from swarm.files import parse_yaml, read_text
+from swarm.files import read_yaml
+from swarm.inputs import ABSENT, Parts, child_at, describe, first_error, key_path, kind_of, model_keys
 from swarm.mission.schema import (
     TASK_CLASSES,
     Mission,
     SearchTask,
 )
 
-Parts = list[str | int]
-
-
 # --- YAML ---------------------------------------------------------------------------------------------
-
-
-class _DuplicateKey(Exception):
-    def __init__(self, key: object, line: int) -> None:
-        super().__init__(key)
-        self.key, self.line = key, line
-
-
-class _Loader(yaml.SafeLoader):
-    """Safe YAML with duplicate keys refused and YAML 1.2 exponent floats (`2.4e9`, `1e5`)."""
-
-    def construct_mapping(self, node, deep=False):  # type: ignore[override]
-        self.flatten_mapping(node)
-        seen: set[object] = set()
-        for key_node, _ in node.value:
-            key = self.construct_object(key_node, deep=deep)
-            try:
-                duplicate = key in seen
-            except TypeError:  # unhashable keys: let the base class complain
-                break
-            if duplicate:
-                raise _DuplicateKey(key, key_node.start_mark.line + 1)
-            seen.add(key)
-        return super().construct_mapping(node, deep=deep)
-
-
-_Loader.add_implicit_resolver(
-    "tag:yaml.org,2002:float",
-    re.compile(r"^[-+]?[0-9][0-9_]*(?:\.[0-9_]*)?[eE][-+]?[0-9]+$"),
-    list("-+0123456789"),
-)
 
 
 def read_mission_yaml(path: str | Path) -> dict:
     """The mission file's YAML as a mapping (not yet validated)."""
     path = Path(path)
-    text = read_text(path, "mission YAML file")
-    try:
-        data = parse_yaml(text, path, loader=_Loader)
-    except _DuplicateKey as exc:
-        raise InputError(path, f"line {exc.line}", exc.key, "each key once in a mapping") from None
+    data = read_yaml(path, "mission YAML file")
     if not isinstance(data, dict):
         found = "an empty file" if data is None else type(data).__name__
         raise InputError(path, "(top level)", found, "a mapping of mission keys (map, swarm, tasks, ...)")
     return data
-
-
-# --- walking the schema alongside the data --------------------------------------------------------------
-
-
-def _strip(ann: Any) -> Any:
-    """The type under Annotated[...] and Optional[...]."""
-    while True:
-        origin = get_origin(ann)
-        if origin is Annotated:
-            ann = get_args(ann)[0]
-            continue
-        if origin in (Union, types.UnionType):
-            args = [a for a in get_args(ann) if a is not type(None)]
-            if len(args) == 1:
-                ann = args[0]
-                continue
-        return ann
-
-
-def _kind(ann: Any) -> tuple[str, Any]:
-    """('model', cls) | ('list', item) | ('dict', value) | ('tagged', None) | ('leaf', type)."""
-    ann = _strip(ann)
-    if isinstance(ann, type) and issubclass(ann, BaseModel):
-        return "model", ann
-    origin = get_origin(ann)
-    if origin is list:
-        return "list", get_args(ann)[0]
-    if origin is dict:
-        return "dict", get_args(ann)[1]
-    if origin in (Union, types.UnionType):
-        args = [_strip(a) for a in get_args(ann)]
-        if all(isinstance(a, type) and issubclass(a, BaseModel) and "type" in a.model_fields for a in args):
-            return "tagged", None
-    return "leaf", ann
-
-
-_ABSENT = object()
-
-
-def _child(node: object, key: str | int) -> object:
-    if isinstance(node, dict) and key in node:
-        return node[key]
-    if isinstance(node, list) and isinstance(key, int) and 0 <= key < len(node):
-        return node[key]
-    return _ABSENT
-
-
-class _At:
-    """Where a pydantic error location points: the key path in the file and the schema there."""
-
-    def __init__(self, loc: Sequence[str | int], raw: object) -> None:
-        self.parts: Parts = []
-        self.model: type[BaseModel] | None = None  # the model holding the last key
-        self.field = None  # its FieldInfo
-        self.ann: Any = None  # the type expected at the location
-        self.is_key = False
-        ann: Any = Mission
-        node = raw
-        for el in loc:
-            kind, inner = _kind(ann) if ann is not None else ("leaf", None)
-            if kind == "tagged":  # pydantic puts the task type in the location: not a key of the file
-                ann = TASK_CLASSES.get(el) if isinstance(el, str) else None
-                continue
-            if el == "[key]":  # a mapping's key, not its value, is wrong
-                self.ann, self.is_key = str, True
-                break
-            if kind == "model":
-                self.model = inner
-                self.field = inner.model_fields.get(el) if isinstance(el, str) else None
-                ann = self.field.annotation if self.field is not None else None
-            elif kind in ("list", "dict"):
-                ann = inner
-            else:
-                ann = None
-            self.parts.append(el)
-            node = _child(node, el)
-        else:
-            self.ann = ann
-        self.value = node
-
-    @property
-    def key(self) -> str:
-        keys = [p for p in self.parts if isinstance(p, str)]
-        return keys[-1] if keys else ""
-
-
-def key_path(parts: Sequence[str | int]) -> str:
-    """['tasks', 1, 'sensor', 'sweep_width_m'] -> 'tasks[1].sensor.sweep_width_m'."""
-    out = ""
-    for p in parts:
-        out += f"[{p}]" if isinstance(p, int) else (f".{p}" if out else str(p))
-    return out or "(top level)"
-
-
-# --- units and what-was-expected ----------------------------------------------------------------------
-
-#: Key suffixes and the unit they mean, longest first.
-UNITS = (
-    ("_per_km", "per kilometre driven"),
-    ("_per_ha", "per hectare"),
-    ("_per_h", "per hour"),
-    ("_mps", "in metres per second"),
-    ("_dbm", "in dBm"),
-    ("_dbi", "in dBi"),
-    ("_deg", "in degrees"),
-    ("_db", "in dB"),
-    ("_hz", "in hertz"),
-    ("_wh", "in watt-hours"),
-    ("_w", "in watts"),
-    ("_m", "in metres"),
-    ("_s", "in seconds"),
-    ("_h", "in hours"),
-)
-_NUMBER_WITH_UNIT = re.compile(r"^\s*[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?\s*[^\d\s.].*$")
-
-
-def unit_of(key: str) -> tuple[str, str]:
-    """(suffix, words) of a key's unit: 'sweep_width_m' -> ('_m', 'in metres'); ('', '') if none."""
-    for suffix, words in UNITS:
-        if key == suffix[1:] or key.endswith(suffix):
-            return suffix, words
-    return "", ""
-
-
-def _number_words(at: _At, integer: bool | None = None) -> str:
-    if integer is None:
-        integer = _strip(at.ann) is int
-    what = "a whole number" if integer else "a number"
-    words = unit_of(at.key)[1]
-    return f"{what} {words}" if words else what
-
-
-def _model_keys(model: type[BaseModel]) -> str:
-    return ", ".join(model.model_fields)
-
-
-def _literal_words(at: _At, ctx: Mapping[str, Any]) -> str:
-    ann = _strip(at.ann)
-    if get_origin(ann) is Literal:
-        return "one of " + ", ".join(repr(a) for a in get_args(ann))
-    return f"one of {ctx.get('expected', '?')}".replace(" or ", ", ")
-
-
-def _short(value: object) -> object:
-    """The found value, or a short description of a big one."""
-    if len(repr(value)) <= 80:
-        return value
-    if isinstance(value, dict):
-        return f"a mapping with keys {', '.join(map(str, list(value)[:8]))}"
-    if isinstance(value, list):
-        return f"a list of {len(value)} items"
-    return repr(value)[:77] + "..."
-
-
-def _describe(error: Mapping[str, Any], raw: object) -> tuple[Parts, object, str]:
-    """(key path parts, found, expected) of one pydantic error."""
-    typ = error["type"]
-    ctx = error.get("ctx") or {}
-    at = _At(error["loc"], raw)
-    parts, value = at.parts, error.get("input")
-    if typ == "extra_forbidden":
-        known = _model_keys(at.model) if at.model is not None else "?"
-        return parts, parts[-1] if parts else value, f"no such key (known keys: {known})"
-    if typ == "missing":
-        desc = ""
-        if at.field is not None and at.field.description:
-            desc = ": " + at.field.description.split(". ")[0].rstrip(".")
-        return parts, "nothing", f"the required key '{at.key}'{desc}"
-    if typ in ("union_tag_invalid", "union_tag_not_found"):
-        tags = ", ".join(repr(t) for t in TASK_CLASSES)
-        found = ctx.get("tag", "nothing")
-        return [*parts, "type"], found, f"a task type, one of {tags}"
-    if typ == "expected":  # the schema's own checks (swarm.mission.schema._expected)
-        if "key" in ctx:
-            parts = [*parts, ctx["key"]]
-        return parts, _short(ctx.get("found", value)), str(ctx["expected"])
-    if typ in ("float_type", "float_parsing", "int_type", "int_parsing", "int_from_float", "finite_number"):
-        integer = typ.startswith("int") or None
-        if typ == "int_type" and _is_plain_number(value):
-            integer = True
-        expected = _number_words(at, integer)
-        if typ == "finite_number":
-            expected = "a finite number" + expected[len("a number") :]
-        suffix = unit_of(at.key)[0]
-        if isinstance(value, str) and _NUMBER_WITH_UNIT.match(value):
-            expected += f", without a unit (the key's '{suffix}' gives it)" if suffix else ", without a unit"
-        return parts, _short(value), expected
-    bounds = {"greater_than": ">", "greater_than_equal": ">=", "less_than": "<", "less_than_equal": "<="}
-    if typ in bounds:
-        limit = next(iter(ctx.values())) if ctx else "?"
-        limit_text = f"{limit:g}" if _is_plain_number(limit) else str(limit)
-        return parts, value, f"{_number_words(at)} {bounds[typ]} {limit_text}"
-    if typ == "literal_error":
-        return parts, _short(value), _literal_words(at, ctx)
-    if typ in ("too_short", "too_long"):
-        n = ctx.get("min_length" if typ == "too_short" else "max_length")
-        side = "at least" if typ == "too_short" else "at most"
-        return parts, _short(value), f"a list of {side} {n} item{'s' if n != 1 else ''}"
-    if typ == "string_too_short":
-        return parts, value, "a non-empty string"
-    if typ == "string_type":
-        return parts, _short(value), "names (string keys)" if at.is_key else "a string"
-    if typ == "bool_type":
-        return parts, _short(value), "true or false"
-    if typ == "list_type":
-        return parts, _short(value), "a list"
-    if typ in ("dict_type", "model_type", "model_attributes_type"):
-        kind, inner = _kind(at.ann) if at.ann is not None else ("leaf", None)
-        keys = f" (keys: {_model_keys(inner)})" if kind == "model" else ""
-        return parts, _short(value), f"a mapping{keys}"
-    return parts, _short(value), str(error.get("msg", typ)).lower()
-
-
-def _is_plain_number(value: object) -> bool:
-    return isinstance(value, int | float) and not isinstance(value, bool)
 
 
 # --- overrides ------------------------------------------------------------------------------------------
@@ -340,7 +84,7 @@ def apply_overrides(
         ann: Any = Mission
         for i, part in enumerate(parts):
             last = i == len(parts) - 1
-            kind, inner = _kind(ann)
+            kind, inner = kind_of(ann)
             here = ".".join(parts[:i]) or "the mission"
             if kind == "tagged":  # a task: its keys are those of its type
                 tag = node.get("type") if isinstance(node, dict) else None
@@ -354,9 +98,7 @@ def apply_overrides(
                 kind, inner = "model", TASK_CLASSES[tag]
             if kind == "model":
                 if part not in inner.model_fields:
-                    raise InputError(
-                        source, path, part, f"a key of {here} (known keys: {_model_keys(inner)})"
-                    )
+                    raise InputError(source, path, part, f"a key of {here} (known keys: {model_keys(inner)})")
                 ann, key = inner.model_fields[part].annotation, part
             elif kind == "dict":
                 ann, key = inner, part
@@ -371,14 +113,14 @@ def apply_overrides(
             if last:
                 node[key] = copy.deepcopy(value)
                 break
-            child = _child(node, key)
-            next_kind = _kind(ann)[0]
+            child = child_at(node, key)
+            next_kind = kind_of(ann)[0]
             inside = f"{here}.{part}" if i else part
             if next_kind == "leaf":
                 raise InputError(
                     source, path, parts[i + 1], f"a path ending at {inside} (it holds a value, not keys)"
                 )
-            if child is _ABSENT or child is None:
+            if child is ABSENT or child is None:
                 if next_kind == "list":
                     raise InputError(
                         source, path, parts[i + 1], f"an index of an item of {inside} (the mission has none)"
@@ -691,8 +433,7 @@ def mission_from_dict(
     try:
         mission = Mission.model_validate(data)
     except ValidationError as exc:
-        first = exc.errors(include_url=False)[0]
-        parts, found, expected = _describe(first, data)
+        parts, found, expected = describe(first_error(exc, data, Mission), data, Mission, "a task type")
         raise report.error(parts, found, expected) from None
     if mission.name is None:
         mission = mission.model_copy(update={"name": Path(source).stem})

@@ -22,15 +22,15 @@ import math
 from typing import Annotated, Any, Literal
 
 from pydantic import (
-    BaseModel,
-    ConfigDict,
     Field,
     PlainValidator,
     PrivateAttr,
     WithJsonSchema,
     model_validator,
 )
-from pydantic_core import PydanticCustomError
+
+from swarm.inputs import InputModel
+from swarm.inputs import expected as _expected
 
 #: Task types, the values of a task's `type:` key.
 TASK_TYPES = ("landing", "search", "relay", "surveillance", "beacon")
@@ -49,17 +49,6 @@ PLATFORM_OFFSHORE_M = {
 SENSOR_MODELS = ("cookie_cutter", "inverse_cube", "random_search")
 
 _POLYGON_KINDS = ("search_area", "landing_zone", "keep_out")
-
-
-def _expected(expected: str, found: object = None, key: str | None = None) -> PydanticCustomError:
-    """An error whose message is what was expected; `found` and `key` refine the one-line report
-    (`key`: a key below the failing location that the error is really about)."""
-    ctx: dict[str, Any] = {"expected": expected}
-    if found is not None:
-        ctx["found"] = found
-    if key is not None:
-        ctx["key"] = key
-    return PydanticCustomError("expected", "{expected}", ctx)
 
 
 def _is_number(value: object) -> bool:
@@ -97,8 +86,8 @@ RegionName = Annotated[str, Field(min_length=1)]
 Fraction = Annotated[float, Field(ge=0.0, le=1.0)]
 
 
-class _Model(BaseModel):
-    model_config = ConfigDict(extra="forbid", strict=True, allow_inf_nan=False, frozen=True)
+class _Model(InputModel):
+    pass
 
 
 # --- robot, swarm, launch, phases -----------------------------------------------------------------

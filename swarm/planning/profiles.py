@@ -23,12 +23,17 @@ makes once per loop iteration; counting them makes a run independent of the mach
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any, Literal
+
+from pydantic import Field, model_validator
 
 from swarm.errors import InputError
 from swarm.files import read_yaml
+from swarm.inputs import InputModel, expected, validate
 
 #: OMPL geometric planners a profile may name (those the ompl Python bindings provide).
 PLANNERS = (
@@ -50,19 +55,6 @@ PLANNERS = (
 #: Planners that build a roadmap once and answer many queries from it.
 ROADMAP_PLANNERS = ("PRM", "PRMstar")
 OBJECTIVES = ("length", "terrain_cost")
-_KEYS = (
-    "name",
-    "description",
-    "planner",
-    "params",
-    "objective",
-    "budget",
-    "simplify",
-    "interpolate_m",
-    "roadmap",
-)
-_BUDGET_KEYS = ("iterations", "time_s")
-_ROADMAP_KEYS = ("grow_iterations", "expand_iterations", "connect_neighbours")
 
 
 @dataclass(frozen=True)
@@ -118,7 +110,7 @@ class PlannerProfile:
             budget["time_s"] = self.time_s
         out.update(budget=budget, simplify=self.simplify, interpolate_m=self.interpolate_m)
         if self.roadmap is not None:
-            out["roadmap"] = {k: getattr(self.roadmap, k) for k in _ROADMAP_KEYS}
+            out["roadmap"] = dataclasses.asdict(self.roadmap)
         return out
 
 
@@ -134,14 +126,6 @@ DEFAULT_PROFILE = PlannerProfile(
     interpolate_m=2.0,
     source="(built-in default, as planners/fast.yaml)",
 )
-
-
-def _number(source: str, where: str, value: object, lo: float, what: str, *, integer: bool = False) -> float:
-    ok = not isinstance(value, bool) and isinstance(value, int if integer else (int, float))
-    if not ok or not math.isfinite(value) or value < lo:  # type: ignore[arg-type]
-        kind = "a whole number" if integer else "a number"
-        raise InputError(source, where, value, f"{what}, {kind} >= {lo:g}")
-    return value  # type: ignore[return-value]
 
 
 def setter_name(param: str) -> str:
@@ -183,9 +167,46 @@ def check_planner_params(planner: str, params: dict, source: str) -> None:
             raise InputError(source, f"params.{key}", value, "a number or true/false")
         try:
             setter(value)
-        except (TypeError, ValueError):
+        except (TypeError, ValueError, RuntimeError):  # RuntimeError: OMPL's own range checks
             doc = (setter.__doc__ or "").split("\n")[0]
             raise InputError(source, f"params.{key}", value, f"a value {planner}.{doc} accepts") from None
+
+
+class _Budget(InputModel):
+    iterations: int | None = Field(None, ge=1, description="Planner iterations (reproducible).")
+    time_s: float | None = Field(None, ge=0.001, description="Wall-clock cap (not reproducible).")
+
+    @model_validator(mode="after")
+    def _some(self) -> _Budget:
+        if self.iterations is None and self.time_s is None:
+            raise expected("a mapping with 'iterations:' and/or 'time_s:'", found={})
+        return self
+
+
+class _Roadmap(InputModel):
+    grow_iterations: int = Field(30000, ge=1)
+    expand_iterations: int = Field(10000, ge=0)
+    connect_neighbours: int = Field(15, ge=1)
+
+
+class ProfileFile(InputModel):
+    """A planner profile YAML as written (the module docstring); `PlannerProfile` is what it means."""
+
+    name: str | None = Field(None, min_length=1)
+    description: str = ""
+    planner: Literal[PLANNERS]  # type: ignore[valid-type]
+    params: dict[str, Any] | None = None  # values are checked by the planner's setters
+    objective: Literal[OBJECTIVES] = "length"  # type: ignore[valid-type]
+    budget: _Budget | None = None
+    simplify: bool = True
+    interpolate_m: float | None = Field(None, ge=0.01)
+    roadmap: _Roadmap | None = None
+
+    @model_validator(mode="after")
+    def _roadmap_planner(self) -> ProfileFile:
+        if self.roadmap is not None and self.planner not in ROADMAP_PLANNERS:
+            raise expected(f"planner {' or '.join(ROADMAP_PLANNERS)}", "a roadmap section", "roadmap")
+        return self
 
 
 def profile_from_dict(
@@ -193,84 +214,21 @@ def profile_from_dict(
 ) -> PlannerProfile:
     """Validate a profile mapping (see the module docstring); errors name the key and what it needs."""
     source = str(source)
-    if not isinstance(data, dict):
-        raise InputError(
-            source, "(top level)", type(data).__name__, "a mapping with 'planner:' and 'objective:'"
-        )
-    for key in data:
-        if key not in _KEYS:
-            raise InputError(source, str(key), key, f"one of the keys {', '.join(_KEYS)}")
-    planner = data.get("planner")
-    if planner not in PLANNERS:
-        raise InputError(source, "planner", planner, f"an OMPL planner, one of {', '.join(PLANNERS)}")
-    objective = data.get("objective", "length")
-    if objective not in OBJECTIVES:
-        raise InputError(source, "objective", objective, "length or terrain_cost")
-    params = data.get("params") or {}
-    if not isinstance(params, dict):
-        raise InputError(source, "params", params, "a mapping of planner settings (e.g. range: 25.0)")
-    check_planner_params(planner, params, source)
-
-    budget = data.get("budget", {"iterations": 20000})
-    if not isinstance(budget, dict) or not budget:
-        raise InputError(source, "budget", budget, "a mapping with 'iterations:' and/or 'time_s:'")
-    for key in budget:
-        if key not in _BUDGET_KEYS:
-            raise InputError(source, f"budget.{key}", key, "iterations or time_s")
-    iterations = budget.get("iterations")
-    if iterations is not None:
-        iterations = int(
-            _number(source, "budget.iterations", iterations, 1, "planner iterations", integer=True)
-        )
-    time_s = budget.get("time_s")
-    if time_s is not None:
-        time_s = float(_number(source, "budget.time_s", time_s, 0.001, "seconds"))
-
-    simplify = data.get("simplify", True)
-    if not isinstance(simplify, bool):
-        raise InputError(source, "simplify", simplify, "true or false")
-    interpolate_m = data.get("interpolate_m")
-    if interpolate_m is not None:
-        interpolate_m = float(_number(source, "interpolate_m", interpolate_m, 0.01, "waypoint spacing (m)"))
-
-    roadmap = None
-    spec = data.get("roadmap")
-    if spec is not None:
-        if planner not in ROADMAP_PLANNERS:
-            raise InputError(
-                source, "roadmap", "a roadmap section", f"planner {' or '.join(ROADMAP_PLANNERS)}"
-            )
-        if not isinstance(spec, dict):
-            raise InputError(source, "roadmap", spec, f"a mapping with keys from {', '.join(_ROADMAP_KEYS)}")
-        for key in spec:
-            if key not in _ROADMAP_KEYS:
-                raise InputError(source, f"roadmap.{key}", key, f"one of {', '.join(_ROADMAP_KEYS)}")
-        values = {
-            k: int(
-                _number(
-                    source, f"roadmap.{k}", spec[k], 0 if k == "expand_iterations" else 1, k, integer=True
-                )
-            )
-            for k in spec
-        }
-        roadmap = RoadmapSettings(**values)
-
-    description = data.get("description", "")
-    if not isinstance(description, str):
-        raise InputError(source, "description", description, "a line of text")
-    pname = data.get("name", name if name is not None else Path(source).stem)
-    if not isinstance(pname, str) or not pname.strip():
-        raise InputError(source, "name", pname, "a non-empty profile name")
+    f = validate(ProfileFile, data, source)
+    params = dict(f.params or {})
+    check_planner_params(f.planner, params, source)
+    budget = f.budget or _Budget(iterations=20000)
+    roadmap = None if f.roadmap is None else RoadmapSettings(**f.roadmap.model_dump())
     return PlannerProfile(
-        name=pname,
-        description=description,
-        planner=planner,
-        params=dict(params),
-        objective=objective,
-        iterations=iterations,
-        time_s=time_s,
-        simplify=simplify,
-        interpolate_m=interpolate_m,
+        name=f.name or (name if name is not None else Path(source).stem),
+        description=f.description,
+        planner=f.planner,
+        params=params,
+        objective=f.objective,
+        iterations=budget.iterations,
+        time_s=budget.time_s,
+        simplify=f.simplify,
+        interpolate_m=f.interpolate_m,
         roadmap=roadmap,
         source=source,
     )

@@ -21,17 +21,19 @@ report.write("reports/landing-sim/report.md")
 from __future__ import annotations
 
 import contextlib
-import json
 from collections.abc import Callable
 from pathlib import Path
+from typing import Annotated, Any
 
 import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
+from pydantic import BaseModel, ConfigDict, Field, model_validator
 from shapely.geometry import LineString, Polygon
 
+from swarm import files
 from swarm.errors import InputError, SwarmError
-from swarm.files import read_text
+from swarm.inputs import XY, expected, validate
 from swarm.mission.plan import MissionPlan, RelayPlanOut, RobotPlan, SearchPlan
 from swarm.planning.radio import RadioParams
 from swarm.report.document import Report
@@ -102,10 +104,7 @@ def detect(path: str | Path) -> tuple[str, Path]:
 
 def read_json(path: Path, what: str) -> dict:
     """A JSON object from `path`; anything else is an `InputError`."""
-    try:
-        data = json.loads(read_text(path, what))
-    except json.JSONDecodeError as exc:
-        raise InputError(path, f"line {exc.lineno}", exc.msg, f"valid JSON ({what})") from None
+    data = files.read_json(path, what)
     if not isinstance(data, dict):
         raise InputError(path, "(top level)", type(data).__name__, f"a JSON object ({what})")
     return data
@@ -124,6 +123,76 @@ def load_beach_map(source: dict):
         return load_map(map_file, load_library(source.get("terrain_file")))
     except SwarmError:
         return None
+
+
+class _Written(BaseModel):
+    """A file swarm wrote, read back: the keys the report needs, checked; other keys ignored."""
+
+    model_config = ConfigDict(extra="ignore", strict=True, frozen=True)
+
+
+class _RobotEntry(_Written):
+    id: str
+    role: str
+    task: str | None = None
+    launch_m: XY
+    release_s: float
+    sea_leg_m: list[XY]
+    ground_m: list[XY]
+    waypoints_m: list[XY] = Field(min_length=1)
+    eta_s: float
+    sea_time_s: float
+    ground_time_s: float
+    length_m: float
+
+
+class _SearchEntry(_Written):
+    task: str
+    area: str = ""
+    area_m: list[Any]
+    sweep_width_m: float
+    spacing_m: float
+    model: str
+    tracks_m: list[list[list[XY]]] = []
+    expected_detection: float
+    swath_coverage: float
+    design: dict[str, Any] = {}
+
+
+class _RelayEntry(_Written):
+    task: str
+    source_m: XY
+    sinks_m: list[XY]
+    positions_m: list[XY]
+    edges: list[Annotated[list[int], Field(min_length=2, max_length=2)]]
+    comm_range_m: float
+    redundancy: int
+    radio: dict[str, Any] | None = None
+    fixed_height_m: float | None = None
+
+
+class PlanFile(_Written):
+    """plan.json (`swarm.mission.plan.plan_json`) as `swarm report` reads it."""
+
+    mission: str
+    map: str
+    seed: int
+    robots: list[_RobotEntry]
+    search: list[_SearchEntry] = []
+    relay: _RelayEntry | None = None
+    source: dict[str, Any] | None = None
+    criteria: dict[str, Any] | None = None
+    budget: dict[str, Any] | None = None
+
+    @model_validator(mode="after")
+    def _edges(self) -> PlanFile:
+        r = self.relay
+        if r is not None:
+            nodes = 1 + len(r.sinks_m) + len(r.positions_m)
+            for i, edge in enumerate(r.edges):
+                if not all(0 <= n < nodes for n in edge):
+                    raise expected(f"node indices in 0..{nodes - 1}", found=edge, key=f"relay.edges[{i}]")
+        return self
 
 
 def plan_from_dict(d: dict, beach_map=None) -> MissionPlan:
@@ -211,6 +280,7 @@ def read_plan(folder: str | Path) -> tuple[MissionPlan, dict]:
     """The plan in `folder`/plan.json (with its map when it can be found) and the JSON itself."""
     path = Path(folder) / PLAN_FILE
     d = read_json(path, "plan.json")
+    validate(PlanFile, d, path)
     try:
         return plan_from_dict(d, load_beach_map(d.get("source") or {})), d
     except (KeyError, TypeError, ValueError, IndexError) as exc:
@@ -226,8 +296,10 @@ def _study_map(folder: Path, summary: dict):
     candidates = [summary.get("mission_path")]
     spec = folder / "study.json"
     if spec.is_file():
-        with contextlib.suppress(OSError, ValueError, AttributeError):
-            candidates.append(json.loads(spec.read_text(encoding="utf-8")).get("mission"))
+        from swarm.studies.store import read_study_file
+
+        with contextlib.suppress(SwarmError):
+            candidates.append(read_study_file(spec).mission)
     for c in candidates:
         if c and Path(c).is_file():
             try:

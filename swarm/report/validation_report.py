@@ -16,14 +16,13 @@ from __future__ import annotations
 import dataclasses
 import io
 import json
-import zipfile
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from swarm.errors import InputError
-from swarm.files import atomic_path, read_text, write_text_atomic
+from swarm.files import atomic_path, read_npz, read_text, write_text_atomic
 from swarm.report.document import Figure, Report, Table, header, jsonable, verdict
 from swarm.report.validation import Poses, errors_png, validation_png
 from swarm.robot.predict import Trajectory
@@ -115,11 +114,10 @@ def read_validation(out_dir: str | Path) -> Validation:
         ) from None
     arrays_path = out / meta.get("arrays", ARRAYS_FILE)
     try:
-        with np.load(arrays_path, allow_pickle=False) as npz:
-            a = {k: npz[k] for k in npz.files}
+        a = read_npz(arrays_path, "the arrays swarm model validate --out wrote")
         truth = Trajectory(*(a[f"truth_{k}"] for k in POSE_KEYS))
         trajectories = {m: Trajectory(*(a[f"{m}_{k}"] for k in POSE_KEYS)) for m in meta["models"]}
-    except (OSError, ValueError, KeyError, zipfile.BadZipFile) as exc:
+    except (ValueError, KeyError) as exc:
         found = f"{type(exc).__name__}: {exc}"
         raise InputError(
             arrays_path, "(contents)", found, "the arrays swarm model validate --out wrote"

@@ -211,7 +211,7 @@ def library_from_dict(data: object, source: str | Path, base: TerrainLibrary | N
         if "like" in spec:
             # a mode defined earlier in this file, else one of the base library
             known = {**(dict(base) if base is not None else {}), **{m.name: m for m in modes}}
-            if spec["like"] not in known:
+            if not isinstance(spec["like"], str) or spec["like"] not in known:
                 raise InputError(
                     source, f"{where}.like", spec["like"], f"a known terrain mode {sorted(known)}"
                 )

@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import io
 import json
-import zipfile
 from collections import Counter
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -26,15 +25,15 @@ from pathlib import Path
 import numpy as np
 
 from swarm.errors import InputError
-from swarm.files import atomic_path, read_text, write_text_atomic
+from swarm.files import read_npz, read_text, write_bytes_atomic, write_text_atomic
 from swarm.mission.plan import MissionPlan
 from swarm.mission.schema import Mission
 from swarm.sim.env import SimConfig, SwarmEnv
 from swarm.sim.layout import PHASES, ROLES
+from swarm.sim.memory import RECORD_EVERY_S, check_fits
 from swarm.sim.policy import ScriptedPolicy
 
 #: Seconds between trajectory samples in the log.
-RECORD_EVERY_S = 2.0
 #: The log's format version, written into outcome.json.
 LOG_VERSION = 1
 
@@ -111,7 +110,9 @@ def simulate(
     on_step: Callable[[SwarmEnv], None] | None = None,
 ) -> MissionLog:
     """Run the mission once with the scripted policy. `progress(t_s, time_limit_s)` is called as
-    simulated time passes; `on_step(env)` after every step (animation frames)."""
+    simulated time passes; `on_step(env)` after every step (animation frames). A run that would
+    not fit in memory is refused before anything is allocated (`swarm.sim.memory`)."""
+    check_fits(mission, record_every_s=record_every_s)
     env = SwarmEnv(mission, action_mode="command", config=config, plan=plan)
     policy = ScriptedPolicy(env)
     env.reset(seed=seed)
@@ -202,8 +203,7 @@ def write_log(log: MissionLog, out_dir: str | Path) -> dict[str, Path]:
         objects_m=log.objects_m,
         object_mine=log.object_mine,
     )
-    with atomic_path(paths["trajectories.npz"]) as tmp:
-        Path(tmp).write_bytes(buf.getvalue())
+    write_bytes_atomic(paths["trajectories.npz"], buf.getvalue())
     write_text_atomic(
         paths["events.jsonl"], "".join(json.dumps(ev, sort_keys=True) + "\n" for ev in log.events)
     )
@@ -266,8 +266,7 @@ def read_log(out_dir: str | Path, plan: MissionPlan | None = None) -> MissionLog
     events = _read_json_lines(out / "events.jsonl")
     where = out / "trajectories.npz"
     try:
-        with np.load(where, allow_pickle=False) as npz:
-            arrays = {k: npz[k] for k in npz.files}
+        arrays = read_npz(where, "the trajectories swarm simulate wrote")
         robots = [str(r) for r in arrays["robots"]]
         n = len(robots)
         times = arrays["times_s"]
@@ -299,7 +298,7 @@ def read_log(out_dir: str | Path, plan: MissionPlan | None = None) -> MissionLog
             completed_s=summary.get("completed_s"),
         )
         log.end_reasons = _end_reasons(robots, events, alive[-1] if len(alive) else np.ones(n, bool))
-    except (OSError, ValueError, KeyError, TypeError, AttributeError, zipfile.BadZipFile) as exc:
+    except (ValueError, KeyError, TypeError, AttributeError) as exc:
         found = f"{type(exc).__name__}: {exc}" if str(exc) else type(exc).__name__
         raise InputError(where, "(contents)", found, "a log written by swarm simulate") from None
     return log

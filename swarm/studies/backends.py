@@ -18,6 +18,8 @@ from swarm.errors import InputError, SwarmError
 from swarm.studies.runner import RunTask, run_task
 
 BACKENDS = ("local", "ray")
+#: Times Ray runs a task again after the process running it died.
+RAY_RETRIES = 3
 
 
 def default_workers() -> int:
@@ -68,7 +70,9 @@ def run_ray(tasks: Sequence[RunTask], workers: int | None, address: str | None) 
             ray.init(num_cpus=workers or default_workers(), **kwargs)
         started = True
     try:
-        remote = ray.remote(num_cpus=1)(run_task)
+        # a worker that dies (kill -9, out of memory, a lost node) has its run retried elsewhere:
+        # the run's seed is in its task, so the retry gives the same row
+        remote = ray.remote(num_cpus=1, max_retries=RAY_RETRIES, retry_exceptions=False)(run_task)
         in_flight = max(2, 2 * int(ray.cluster_resources().get("CPU", 1)))
         pending = list(reversed(tasks))
         running: list = []

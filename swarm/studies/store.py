@@ -17,16 +17,34 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import Any
 
+import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
+from pydantic import Field
 
 from swarm.errors import InputError
-from swarm.files import atomic_path, write_text_atomic
+from swarm.files import atomic_path, read_json, write_text_atomic
+from swarm.inputs import InputModel, validate
 
 PARTS = "parts"
 RESULTS = "results.parquet"
 SPEC = "study.json"
+
+
+class StudyFile(InputModel):
+    """study.json: what identifies a study (`StudySpec.as_dict`); a resume must match it."""
+
+    mission: str = Field(min_length=1, description="The mission file, resolved.")
+    runs: int = Field(ge=1)
+    sweeps: dict[str, list[Any]]
+    seed: int = Field(ge=0)
+
+
+def read_study_file(path: str | Path) -> StudyFile:
+    """A study.json, checked; a damaged one is an `InputError` naming the file and key."""
+    return validate(StudyFile, read_json(path, "study.json"), path)
 
 
 class ResultStore:
@@ -41,15 +59,12 @@ class ResultStore:
         """Create the folder, or check that an existing one holds the same study."""
         path = self.out / SPEC
         if path.exists():
-            try:
-                old = json.loads(path.read_text())
-            except (OSError, json.JSONDecodeError):
-                old = None
-            if old != spec:
+            old = read_study_file(path)
+            if old.model_dump() != spec:
                 raise InputError(
                     str(path),
                     "(study)",
-                    "a different study" if old is not None else "an unreadable study.json",
+                    "a different study",
                     "the same mission, runs, sweeps and seed to resume it, or a new --out folder",
                 )
         self.parts.mkdir(parents=True, exist_ok=True)
@@ -65,9 +80,22 @@ class ResultStore:
         """(point, run) of every run already stored."""
         keys: set[tuple[int, int]] = set()
         for f in self._part_files():
-            t = pq.read_table(f, columns=["point", "run"])
+            t = self._read(f, columns=["point", "run"])
             keys.update(zip(t.column("point").to_pylist(), t.column("run").to_pylist(), strict=True))
         return keys
+
+    @staticmethod
+    def _read(path: Path, **kwargs) -> pa.Table:
+        """One part; an unreadable one is an `InputError` naming it (it was not written here)."""
+        try:
+            return pq.read_table(path, **kwargs)
+        except (OSError, pa.ArrowException) as exc:
+            raise InputError(
+                path,
+                "(file)",
+                str(exc).splitlines()[0] if str(exc) else "an unreadable file",
+                "a Parquet part this study wrote (move it away to run its runs again)",
+            ) from None
 
     def append(self, rows: list[dict]) -> Path | None:
         """Write finished runs as one new part, atomically."""
@@ -84,12 +112,22 @@ class ResultStore:
         return path
 
     def table(self) -> pa.Table:
-        """Every stored run, sorted by (point, run)."""
+        """Every stored run once, sorted by (point, run).
+
+        A (point, run) stored twice (two processes that wrote one folder before it was locked, or
+        a part copied in by hand) counts once: the first part that has it wins. The run's seed is
+        in its key, so both copies hold the same outcome; only `runtime_s` may differ."""
         files = self._part_files()
         if not files:
             return self.schema.empty_table()
-        table = pa.concat_tables([pq.read_table(f, schema=self.schema) for f in files])
-        return table.sort_by([("point", "ascending"), ("run", "ascending")])
+        table = pa.concat_tables([self._read(f, schema=self.schema) for f in files])
+        point = table.column("point").to_numpy()
+        run = table.column("run").to_numpy()
+        order = np.lexsort((np.arange(len(table)), run, point))  # stable: earlier parts first
+        p, r = point[order], run[order]
+        first = np.ones(len(order), dtype=bool)
+        first[1:] = (p[1:] != p[:-1]) | (r[1:] != r[:-1])
+        return table.take(order[first])
 
     def finish(self) -> pa.Table:
         """Write results.parquet (all runs, sorted) and return the table."""

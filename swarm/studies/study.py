@@ -22,7 +22,7 @@ import pyarrow as pa
 
 import swarm
 from swarm.errors import SwarmError
-from swarm.files import write_text_atomic
+from swarm.files import folder_lock, write_text_atomic
 from swarm.studies import backends, stats
 from swarm.studies.runner import RunTask, run_seed
 from swarm.studies.store import ResultStore
@@ -100,10 +100,24 @@ def run_study(
 ) -> tuple[pa.Table, dict]:
     """Run what is missing of the study in `out`, then write results.parquet and summary.json.
 
-    `progress(done, total)` is called as runs finish (`done` counts runs found from before)."""
+    `progress(done, total)` is called as runs finish (`done` counts runs found from before). The
+    folder is locked while the study writes it: a second study into it raises `FolderBusy`."""
     if backend not in backends.BACKENDS:
         raise SwarmError(f"study: backend {backend!r}, expected one of {list(backends.BACKENDS)}")
-    check_points(spec.mission_path, spec.sweeps)
+    at_once = (workers or backends.default_workers()) if backend == "local" else 1
+    check_points(spec.mission_path, spec.sweeps, at_once=at_once)
+    with folder_lock(out):
+        return _run_locked(spec, Path(out), backend, workers, address, progress)
+
+
+def _run_locked(
+    spec: StudySpec,
+    out: Path,
+    backend: str,
+    workers: int | None,
+    address: str | None,
+    progress: Progress | None,
+) -> tuple[pa.Table, dict]:
     store = ResultStore(out, spec.table_schema())
     store.open(spec.as_dict())
     done = store.done()
@@ -142,7 +156,7 @@ def run_study(
             "date": datetime.date.today().isoformat(),
         }
     )
-    write_text_atomic(Path(out) / "summary.json", json.dumps(summary, indent=1, sort_keys=True) + "\n")
+    write_text_atomic(out / "summary.json", json.dumps(summary, indent=1, sort_keys=True) + "\n")
     return table, summary
 
 

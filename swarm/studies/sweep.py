@@ -101,10 +101,13 @@ def points(sweeps: Sequence[Sweep]) -> list[dict[str, object]]:
     ]
 
 
-def check_points(mission_path: str | Path, sweeps: Sequence[Sweep]) -> None:
+def check_points(mission_path: str | Path, sweeps: Sequence[Sweep], at_once: int = 1) -> None:
     """Load the mission at every point (keys exist, values are valid), so a bad sweep fails before
-    any run: `--sweep swarm.count: found -5, expected ...` (one line, naming the key)."""
+    any run: `--sweep swarm.count: found -5, expected ...` (one line, naming the key); and refuse a
+    point whose `at_once` runs in parallel would not fit in memory (`swarm.sim.memory`)."""
     from swarm.mission.load import load_mission
+    from swarm.sim.memory import check_fits
 
     for point in points(sweeps):
-        load_mission(mission_path, point, overrides_source="--sweep")
+        mission = load_mission(mission_path, point, overrides_source="--sweep")
+        check_fits(mission, at_once=at_once)

@@ -45,14 +45,17 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Annotated
 
 import numpy as np
 import shapely
+from pydantic import Field, StringConstraints
 from scipy import sparse
 from scipy.ndimage import binary_erosion, gaussian_filter, gaussian_filter1d
 from shapely.geometry import Point, Polygon
 
 from swarm.errors import InputError
+from swarm.inputs import InputModel, validate
 from swarm.world import coastal
 from swarm.world.beachmap import BeachMap, Region
 
@@ -265,15 +268,21 @@ def _smoothstep(t: np.ndarray) -> np.ndarray:
     return t * t * (3.0 - 2.0 * t)
 
 
-# --- argument checks -------------------------------------------------------------------------------
-def _check(where: str, value: object, lo: float, hi: float, what: str, *, lo_open: bool = False) -> float:
-    ok = isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value)
-    if ok:
-        ok = (value > lo if lo_open else value >= lo) and value <= hi
-    if not ok:
-        bracket = "(" if lo_open else "["
-        raise InputError(_SOURCE, where, value, f"{what}, a number in {bracket}{lo:g}, {hi:g}]")
-    return float(value)  # type: ignore[arg-type]
+# --- arguments ------------------------------------------------------------------------------------
+class GeneratorParams(InputModel):
+    """What `generate_beach` takes, with the ranges the beach science holds over."""
+
+    seed: int = Field(0, ge=0)
+    length_m: float = Field(400.0, ge=30.0, le=50_000.0, description="Shore length.")
+    width_m: float = Field(200.0, ge=30.0, le=5_000.0, description="Map width from the sea inland.")
+    d50_mm: float = Field(0.3, ge=0.06, le=4.0, description="Median grain size, sand to granules.")
+    breaker_height_m: float = Field(1.0, ge=0.05, le=8.0)
+    cell_m: float = Field(1.0, gt=0.0, le=10.0)
+    wave_period_s: float = Field(8.0, ge=2.0, le=25.0)
+    name: Annotated[str, StringConstraints(strip_whitespace=True, min_length=1)] = "beach"
+    river_mouth: bool = False
+    rock_outcrops: float = Field(0.0, ge=0.0, le=5.0, description="About 1: a rock platform every 300 m.")
+    tide_range_m: float = Field(1.0, ge=0.0, le=12.0, description="Spring tidal range.")
 
 
 # --- the generator ---------------------------------------------------------------------------------
@@ -298,18 +307,26 @@ def generate_beach(
     about 1 for one rock platform every 300 m of shore (size grows with it); `river_mouth` cuts a
     river through the beach. Same arguments, same map. See the module docstring for the bands.
     """
-    if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
-        raise InputError(_SOURCE, "seed", seed, "a whole number >= 0")
-    length_m = _check("length_m", length_m, 30.0, 50_000.0, "shore length (m)")
-    width_m = _check("width_m", width_m, 30.0, 5_000.0, "map width from the sea inland (m)")
-    d50_mm = _check("d50_mm", d50_mm, 0.06, 4.0, "median grain size (mm), sand to granules")
-    breaker_height_m = _check("breaker_height_m", breaker_height_m, 0.05, 8.0, "breaker height (m)")
-    cell_m = _check("cell_m", cell_m, 0.0, 10.0, "cell size (m)", lo_open=True)
-    wave_period_s = _check("wave_period_s", wave_period_s, 2.0, 25.0, "wave period (s)")
-    rock_outcrops = _check("rock_outcrops", rock_outcrops, 0.0, 5.0, "rock outcrop intensity")
-    tide_range_m = _check("tide_range_m", tide_range_m, 0.0, 12.0, "spring tidal range (m)")
-    if not isinstance(name, str) or not name.strip():
-        raise InputError(_SOURCE, "name", name, "a non-empty map name")
+    p = validate(
+        GeneratorParams,
+        {
+            "seed": int(seed) if isinstance(seed, np.integer) else seed,
+            "length_m": length_m,
+            "width_m": width_m,
+            "d50_mm": d50_mm,
+            "breaker_height_m": breaker_height_m,
+            "cell_m": cell_m,
+            "wave_period_s": wave_period_s,
+            "name": name,
+            "river_mouth": river_mouth,
+            "rock_outcrops": rock_outcrops,
+            "tide_range_m": tide_range_m,
+        },
+        _SOURCE,
+    )
+    seed, length_m, width_m, cell_m, name = p.seed, p.length_m, p.width_m, p.cell_m, p.name
+    d50_mm, breaker_height_m, wave_period_s = p.d50_mm, p.breaker_height_m, p.wave_period_s
+    river_mouth, rock_outcrops, tide_range_m = p.river_mouth, p.rock_outcrops, p.tide_range_m
     cols, rows = round(length_m / cell_m), round(width_m / cell_m)
     if min(rows, cols) < 20:
         raise InputError(

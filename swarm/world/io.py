@@ -42,35 +42,108 @@ import math
 import os
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
+from typing import Annotated, Any, Literal
 
 import numpy as np
 import shapely
 import yaml
+from pydantic import Field, PlainValidator, model_validator
 from shapely.errors import ShapelyError
 from shapely.geometry import LineString, Point, Polygon, box, mapping, shape
 from shapely.geometry.base import BaseGeometry
 from shapely.validation import explain_validity
 
 from swarm.errors import InputError
-from swarm.files import atomic_path, parse_yaml, read_text, write_text_atomic
+from swarm.files import atomic_path, read_json, read_npz, read_text, write_text_atomic
+from swarm.inputs import XY, InputModel, expected, load_model
 from swarm.robot.terrain import TerrainLibrary, load_library
 from swarm.world.beachmap import REGION_KINDS, BeachMap, Region
 
-MAP_KEYS = (
-    "name",
-    "cell_m",
-    "origin_m",
-    "terrain_classes",
-    "grid",
-    "regions",
-    "crs",
-    "origin_easting_m",
-    "origin_northing_m",
-)
-_REQUIRED = ("name", "cell_m", "origin_m", "terrain_classes", "grid")
-_GEOMETRY_KEYS = ("point", "line", "polygon", "geometry")
-_REGION_KEYS = ("kind", *_GEOMETRY_KEYS, "holes", "properties")
 GRID_ARRAYS = {"terrain": np.dtype(np.int8), "elevation_m": np.dtype(np.float32)}
+_GEOMETRY_KEYS = ("point", "line", "polygon", "geometry")
+
+
+class RegionSpec(InputModel):
+    """One region of the map YAML: its kind and exactly one geometry (module docstring)."""
+
+    kind: Literal[REGION_KINDS]  # type: ignore[valid-type]
+    point: XY | None = None
+    line: list[XY] | None = Field(None, min_length=2)
+    polygon: list[XY] | None = Field(None, min_length=3, description="The exterior ring.")
+    holes: list[Annotated[list[XY], Field(min_length=3)]] | None = None
+    geometry: dict[str, Any] | None = Field(None, description="A GeoJSON geometry object.")
+    properties: dict[str, Any] | None = None
+
+    @model_validator(mode="after")
+    def _one_geometry(self) -> RegionSpec:
+        given = [k for k in _GEOMETRY_KEYS if getattr(self, k) is not None]
+        if len(given) != 1:
+            raise expected("exactly one of point, line, polygon, geometry", found=given or "no geometry")
+        if self.holes is not None and given[0] != "polygon":
+            raise expected("holes only with 'polygon'", found="holes", key="holes")
+        clash = sorted({"name", "kind"} & set(self.properties or {}))
+        if clash:
+            raise expected(
+                "property names other than 'name' and 'kind'", found=clash[0], key=f"properties.{clash[0]}"
+            )
+        return self
+
+    @property
+    def geometry_key(self) -> str:
+        return next(k for k in _GEOMETRY_KEYS if getattr(self, k) is not None)
+
+
+def _epsg(value: object) -> int | None:
+    """`crs:` as the EPSG code of a projected CRS in metres (`swarm.world.crs.check_crs`)."""
+    from swarm.world.crs import check_crs
+
+    if value is None:
+        return None
+    try:
+        return check_crs("", "crs", value)
+    except InputError as exc:
+        raise expected(exc.expected, found=exc.found) from None
+
+
+class MapFile(InputModel):
+    """The map YAML as written (module docstring); `load_map` turns it into a `BeachMap`."""
+
+    name: str = Field(min_length=1, description="The map's name.")
+    cell_m: float = Field(gt=0, description="Side of a square cell.")
+    origin_m: XY = Field(description="(x, y) of the south-west corner of cell (row 0, col 0).")
+    terrain_classes: list[str] = Field(min_length=1, max_length=127, description="Terrain-mode names.")
+    grid: str = Field(min_length=1, description="The .npz grid file, relative to the map YAML.")
+    regions: str | dict[str, RegionSpec] | None = None
+    crs: Annotated[int | None, PlainValidator(_epsg)] = Field(
+        None, description="EPSG code, projected, metres."
+    )
+    origin_easting_m: float | None = None
+    origin_northing_m: float | None = None
+
+    @model_validator(mode="before")
+    @classmethod
+    def _regions_kind(cls, data: object) -> object:
+        """One message for a `regions:` that is neither form (a union's errors would name one)."""
+        if isinstance(data, dict) and not isinstance(data.get("regions"), str | dict | None):
+            raise expected(
+                "a mapping of region names to regions, or a .geojson file name",
+                found=data["regions"],
+                key="regions",
+            )
+        return data
+
+    @model_validator(mode="after")
+    def _checks(self) -> MapFile:
+        for i, cls in enumerate(self.terrain_classes):
+            if self.terrain_classes.index(cls) != i:
+                raise expected("each terrain class listed once", found=cls, key=f"terrain_classes[{i}]")
+        given = [k for k in ("origin_easting_m", "origin_northing_m") if getattr(self, k) is not None]
+        if given and self.crs is None:
+            raise expected("a 'crs:' EPSG code beside it", found=getattr(self, given[0]), key=given[0])
+        if len(given) == 1:
+            other = ({"origin_easting_m", "origin_northing_m"} - set(given)).pop()
+            raise expected(f"'{other}:' beside '{given[0]}:'", found="nothing", key=other)
+        return self
 
 
 # --- small checks ---------------------------------------------------------------------------------
@@ -84,12 +157,6 @@ def _xy(source: str | Path, where: str, value: object) -> tuple[float, float]:
     if not isinstance(value, list | tuple) or len(value) != 2 or not all(_is_number(v) for v in value):
         raise InputError(source, where, value, "a pair [x, y] of finite numbers (metres)")
     return float(value[0]), float(value[1])
-
-
-def _xy_list(source: str | Path, where: str, value: object, at_least: int, what: str) -> list:
-    if not isinstance(value, list | tuple) or len(value) < at_least:
-        raise InputError(source, where, value, f"a list of at least {at_least} [x, y] pairs ({what})")
-    return [_xy(source, f"{where}[{i}]", v) for i, v in enumerate(value)]
 
 
 def _check_properties(source: str | Path, where: str, value: object) -> dict:
@@ -114,8 +181,11 @@ def _check_geometry(
         raise InputError(source, where, "3-D coordinates", "2-D [x, y] coordinates (metres)")
     if not np.isfinite(shapely.get_coordinates(geom)).all():
         raise InputError(source, where, "non-finite coordinates", "finite [x, y] coordinates (metres)")
-    if not geom.is_valid:
-        raise InputError(source, where, explain_validity(geom), "a valid geometry (shapely is_valid)")
+    with np.errstate(all="ignore"):  # GEOS on coordinates near the float limit: the bounds refuse them
+        valid = geom.is_valid
+        reason = None if valid else explain_validity(geom)
+    if not valid:
+        raise InputError(source, where, reason, "a valid geometry (shapely is_valid)")
     if bounds is not None and not box(*bounds).covers(geom):
         found = "extent (" + ", ".join(f"{b:g}" for b in geom.bounds) + ")"
         expected = "a region inside the map bounds (" + ", ".join(f"{b:g}" for b in bounds) + ")"
@@ -129,46 +199,22 @@ def _check_kind(source: str | Path, where: str, kind: object) -> str:
     return str(kind)
 
 
-def _region_from_inline(
-    source: str | Path, name: str, spec: object, bounds: tuple[float, float, float, float] | None
+def _region_from_spec(
+    source: str | Path, name: str, spec: RegionSpec, bounds: tuple[float, float, float, float] | None
 ) -> Region:
-    where = f"regions.{name}"
-    if not isinstance(spec, Mapping):
-        raise InputError(
-            source, where, spec, "a mapping with 'kind' and one of point, line, polygon, geometry"
-        )
-    for key in spec:
-        if key not in _REGION_KEYS:
-            raise InputError(source, f"{where}.{key}", key, f"one of {', '.join(_REGION_KEYS)}")
-    if "kind" not in spec:
-        raise InputError(source, f"{where}.kind", "nothing", f"one of {', '.join(REGION_KINDS)}")
-    kind = _check_kind(source, f"{where}.kind", spec["kind"])
-    given = [k for k in _GEOMETRY_KEYS if k in spec]
-    if len(given) != 1:
-        raise InputError(
-            source, where, given or "no geometry", "exactly one of point, line, polygon, geometry"
-        )
-    key = given[0]
-    at = f"{where}.{key}"
-    if "holes" in spec and key != "polygon":
-        raise InputError(source, f"{where}.holes", "holes", "holes only with 'polygon'")
-    value = spec[key]
+    """A region of the map YAML (already validated as a `RegionSpec`) as a shapely shape."""
+    key = spec.geometry_key
+    at = f"regions.{name}.{key}"
     if key == "point":
-        geom: BaseGeometry = Point(_xy(source, at, value))
+        geom: BaseGeometry = Point(spec.point)
     elif key == "line":
-        geom = LineString(_xy_list(source, at, value, 2, "a line"))
+        geom = LineString(spec.line)
     elif key == "polygon":
-        shell = _xy_list(source, at, value, 3, "the exterior ring")
-        holes = spec.get("holes") or []
-        if not isinstance(holes, list):
-            raise InputError(source, f"{where}.holes", holes, "a list of rings, each a list of [x, y]")
-        rings = [_xy_list(source, f"{where}.holes[{i}]", h, 3, "a hole") for i, h in enumerate(holes)]
-        geom = Polygon(shell, rings)
+        geom = Polygon(spec.polygon, spec.holes or [])
     else:
-        geom = _shape(source, at, value)
+        geom = _shape(source, at, spec.geometry)
     _check_geometry(source, at, geom, bounds)
-    props = _check_properties(source, f"{where}.properties", spec.get("properties"))
-    return Region(name=name, kind=kind, geometry=geom, properties=props)
+    return Region(name=name, kind=spec.kind, geometry=geom, properties=dict(spec.properties or {}))
 
 
 def _shape(source: str | Path, where: str, value: object) -> BaseGeometry:
@@ -236,39 +282,19 @@ def regions_from_geojson(
     return regions
 
 
-def _read_json(path: Path) -> object:
-    text = read_text(path, "GeoJSON file")
-    try:
-        return json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise InputError(path, f"line {exc.lineno}", exc.msg, "GeoJSON (JSON)") from None
-
-
 def load_geojson_regions(
     path: str | Path, bounds: tuple[float, float, float, float] | None = None
 ) -> dict[str, Region]:
     """Regions from a GeoJSON file (map metres), checked against `bounds` when given."""
     path = Path(path)
-    return regions_from_geojson(_read_json(path), path, bounds)
+    return regions_from_geojson(read_json(path, "GeoJSON file"), path, bounds)
 
 
 # --- the map file ----------------------------------------------------------------------------------
 
 
-def _read_yaml(path: Path) -> object:
-    return parse_yaml(read_text(path, "map YAML file"), path)
-
-
-def _load_grid(path: Path, source: Path) -> tuple[np.ndarray, np.ndarray]:
-    if not path.is_file():
-        raise InputError(source, "grid", str(path), "an existing .npz file (relative to the map YAML)")
-    try:
-        with np.load(path, allow_pickle=False) as npz:
-            arrays = {k: npz[k] for k in npz.files}
-    except (OSError, ValueError, EOFError) as exc:
-        raise InputError(
-            path, "(file)", str(exc).splitlines()[0] if str(exc) else "unreadable", "an .npz"
-        ) from None
+def _load_grid(path: Path) -> tuple[np.ndarray, np.ndarray]:
+    arrays = read_npz(path, "an .npz grid (numpy.savez) holding arrays 'terrain' and 'elevation_m'")
     names = sorted(arrays)
     for name in GRID_ARRAYS:
         if name not in arrays:
@@ -280,6 +306,8 @@ def _load_grid(path: Path, source: Path) -> tuple[np.ndarray, np.ndarray]:
         raise InputError(path, extra[0], f"arrays {names}", "only arrays 'terrain' and 'elevation_m'")
     for name, dtype in GRID_ARRAYS.items():
         a = arrays[name]
+        if not isinstance(a, np.ndarray):
+            raise InputError(path, name, "a member that is not a .npy array", f"a {dtype} array")
         if a.dtype != dtype:
             raise InputError(path, name, f"dtype {a.dtype}", f"dtype {dtype}")
         if a.ndim != 2 or 0 in a.shape:
@@ -299,111 +327,58 @@ def _load_grid(path: Path, source: Path) -> tuple[np.ndarray, np.ndarray]:
 
 
 def load_map(path: str | Path, library: TerrainLibrary | None = None) -> BeachMap:
-    """Read and check a map YAML, its `.npz` grid and its regions (see the module docstring).
-
-    Terrain classes must be modes of `library` (default: `load_library()`, the bundled modes).
-    """
+    """Read and check a map YAML (`MapFile`), its `.npz` grid and its regions (see the module
+    docstring). Terrain classes must be modes of `library` (default: `load_library()`, the bundled
+    modes)."""
     path = Path(path)
-    data = _read_yaml(path)
-    if not isinstance(data, Mapping):
-        raise InputError(
-            path, "(top level)", type(data).__name__, f"a mapping with keys {', '.join(MAP_KEYS)}"
-        )
-    for key in data:
-        if key not in MAP_KEYS:
-            raise InputError(path, str(key), key, f"one of the keys {', '.join(MAP_KEYS)}")
-    for key in _REQUIRED:
-        if key not in data:
-            raise InputError(path, key, "nothing", f"a '{key}:' entry")
-
-    name = data["name"]
-    if not isinstance(name, str) or not name.strip():
-        raise InputError(path, "name", name, "a non-empty string")
-    cell_m = data["cell_m"]
-    if not _is_number(cell_m) or cell_m <= 0:
-        raise InputError(path, "cell_m", cell_m, "a positive number of metres")
-    origin = _xy(path, "origin_m", data["origin_m"])
-
-    classes = data["terrain_classes"]
-    if not isinstance(classes, list) or not classes:
-        raise InputError(path, "terrain_classes", classes, "a non-empty list of terrain-mode names")
-    if len(classes) > 127:
-        raise InputError(path, "terrain_classes", f"{len(classes)} classes", "at most 127 (int8 indices)")
+    f = load_model(path, MapFile, "map YAML file")
     library = load_library() if library is None else library
-    for i, cls in enumerate(classes):
-        if not isinstance(cls, str) or cls not in library:
+    for i, cls in enumerate(f.terrain_classes):
+        if cls not in library:
             raise InputError(path, f"terrain_classes[{i}]", cls, f"a terrain mode, one of {sorted(library)}")
-        if classes.index(cls) != i:
-            raise InputError(path, f"terrain_classes[{i}]", cls, "each terrain class listed once")
 
-    grid = data["grid"]
-    if not isinstance(grid, str) or not grid.strip():
-        raise InputError(path, "grid", grid, "the name of the .npz grid file beside the YAML")
-    grid_path = path.parent / grid
-    terrain, elevation = _load_grid(grid_path, path)
-    if terrain.min() < 0 or terrain.max() >= len(classes):
-        bad = (terrain < 0) | (terrain >= len(classes))
+    grid_path = path.parent / f.grid
+    if not grid_path.is_file():
+        raise InputError(path, "grid", f.grid, "an existing .npz file (relative to the map YAML)")
+    terrain, elevation = _load_grid(grid_path)
+    n = len(f.terrain_classes)
+    bad = (terrain < 0) | (terrain >= n)
+    if bad.any():
         row, col = (int(i) for i in np.argwhere(bad)[0])
         raise InputError(
             grid_path,
             f"terrain[{row}, {col}]",
             int(terrain[row, col]),
-            f"a class index in 0..{len(classes) - 1} (terrain_classes of {path.name})",
+            f"a class index in 0..{n - 1} (terrain_classes of {path.name})",
         )
 
     rows, cols = terrain.shape
-    x0, y0 = origin
-    bounds = (x0, y0, x0 + cols * float(cell_m), y0 + rows * float(cell_m))
-    regions: dict[str, Region] = {}
-    spec = data.get("regions")
-    if isinstance(spec, str):
-        regions = load_geojson_regions(path.parent / spec, bounds)
-    elif isinstance(spec, Mapping):
-        for rname, rspec in spec.items():
-            if not isinstance(rname, str) or not rname:
-                raise InputError(path, f"regions.{rname}", rname, "a region name (a non-empty string)")
-            regions[rname] = _region_from_inline(path, rname, rspec, bounds)
-    elif spec is not None:
+    x0, y0 = f.origin_m
+    bounds = (x0, y0, x0 + cols * f.cell_m, y0 + rows * f.cell_m)
+    if not all(math.isfinite(b) for b in bounds):
         raise InputError(
-            path, "regions", spec, "a mapping of region names to regions, or a .geojson file name"
+            path, "cell_m", f.cell_m, f"a cell size whose {cols} x {rows} grid has finite bounds"
         )
-
-    crs, crs_origin = _crs_keys(path, data, origin)
+    if isinstance(f.regions, str):
+        regions = load_geojson_regions(path.parent / f.regions, bounds)
+    else:
+        regions = {
+            name: _region_from_spec(path, name, spec, bounds) for name, spec in (f.regions or {}).items()
+        }
+    crs_origin = None
+    if f.crs is not None:
+        crs_origin = f.origin_m if f.origin_easting_m is None else (f.origin_easting_m, f.origin_northing_m)
     return BeachMap(
-        name=name,
-        cell_m=float(cell_m),
-        origin_m=origin,
-        terrain_classes=tuple(classes),
+        name=f.name,
+        cell_m=f.cell_m,
+        origin_m=f.origin_m,
+        terrain_classes=tuple(f.terrain_classes),
         terrain=terrain,
         elevation_m=elevation,
         regions=regions,
-        crs=crs,
+        crs=f.crs,
         crs_origin_m=crs_origin,
     )
-
-
-def _crs_keys(
-    path: Path, data: Mapping, origin: tuple[float, float]
-) -> tuple[int | None, tuple[float, float] | None]:
-    """The optional `crs` and the projected coordinates of `origin_m` (default: origin_m itself,
-    a map drawn in its CRS's own coordinates, as a DEM is)."""
-    from swarm.world.crs import check_crs
-
-    given = [k for k in ("origin_easting_m", "origin_northing_m") if k in data]
-    if "crs" not in data:
-        if given:
-            raise InputError(path, given[0], data[given[0]], "a 'crs:' EPSG code beside it")
-        return None, None
-    crs = check_crs(path, "crs", data["crs"])
-    if len(given) == 1:
-        other = ({"origin_easting_m", "origin_northing_m"} - set(given)).pop()
-        raise InputError(path, other, "nothing", f"'{other}:' beside '{given[0]}:'")
-    if not given:
-        return crs, origin
-    for key in given:
-        if not _is_number(data[key]) or not math.isfinite(data[key]):
-            raise InputError(path, key, data[key], "a number of metres in the crs")
-    return crs, (float(data["origin_easting_m"]), float(data["origin_northing_m"]))
 
 
 def _plain(value: object) -> object:

@@ -7,6 +7,7 @@ from __future__ import annotations
 import contextlib
 import io
 import json
+import os
 import re
 
 import numpy as np
@@ -226,3 +227,35 @@ def test_phase_counts_split_live_robots_by_phase_and_the_rest_by_end():
     assert counts["expended"].tolist() == [0, 0, 0, 1]
     total = sum(c for c in counts.values())
     assert total.tolist() == [3, 3, 3, 3]
+
+
+def test_a_full_disk_is_one_line_and_leaves_only_whole_files(tmp_path, monkeypatch):
+    """The disk fills after plan.json, plan.geojson and trajectories.npz: exit 2, one line naming
+    events.jsonl; what is there is whole, nothing temporary is left."""
+    import errno
+
+    from swarm import files
+
+    fsync, synced = files.os.fsync, []
+
+    def filling(fd: int) -> None:
+        synced.append(fd)
+        if len(synced) > 3:
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        fsync(fd)
+
+    mission = tmp_path / "tiny.yaml"
+    mission.write_text(TINY)
+    out = tmp_path / "out"
+    monkeypatch.setattr(files.os, "fsync", filling)
+    code, _stdout, err = _run(["simulate", str(mission), "--seed", "1", "--workers", "1", "--out", str(out)])
+    assert code == 2
+    assert err.splitlines()[-1] == (  # after the progress bars
+        f"swarm: error: {out / 'events.jsonl'}: could not write it (No space left on device); "
+        "nothing partial was left"
+    )
+    assert sorted(p.name for p in out.iterdir()) == ["plan.geojson", "plan.json", "trajectories.npz"]
+    json.loads((out / "plan.json").read_text())
+    json.loads((out / "plan.geojson").read_text())
+    with np.load(out / "trajectories.npz") as npz:
+        assert npz["xy_m"].shape[-1] == 2

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import contextlib
 import io
+import json
 import math
 import os
 import signal
@@ -302,3 +303,113 @@ def test_plan_evaluate_puts_the_simulations_beside_the_plan(tmp_path, capsys) ->
     # the report rebuilt from the folder says the same
     assert main(["report", str(out), "--format", "md", "-o", str(tmp_path / "again.md")]) == 0
     assert "The plan in simulation" in (tmp_path / "again.md").read_text()
+
+
+@pytest.mark.slow
+def test_two_studies_into_one_folder_one_proceeds_and_no_row_is_doubled(tmp_path) -> None:
+    """Issue 15: two `swarm study` at once into one --out used to leave 5 rows for a 3-run study."""
+    out = tmp_path / "cc"
+    argv = ["swarm", "study", str(REPO / "missions" / "landing.yaml"), "--runs", "3", "--workers", "1",
+            "--out", str(out)]  # fmt: skip
+    code = "import sys; from swarm.cli import main; sys.exit(main(sys.argv[2:]))"
+    procs = [
+        subprocess.Popen(
+            [sys.executable, "-c", code, *argv], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+        )
+        for _ in range(2)
+    ]
+    results = [(p, *p.communicate(timeout=300)) for p in procs]
+    assert sorted(p.returncode for p, _, _ in results) == [0, 2]
+    (winner, _, _), (_, _, err) = sorted(results, key=lambda r: r[0].returncode)
+    assert err.strip().splitlines() == [
+        f"swarm: error: {out}: in use by pid {winner.pid} ({' '.join(argv)}); "
+        "wait for it to finish, or write to another folder"
+    ]
+    table = pq.read_table(out / "results.parquet")
+    keys = list(zip(table.column("point").to_pylist(), table.column("run").to_pylist(), strict=True))
+    assert keys == [(0, 0), (0, 1), (0, 2)]
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["runs"] == 3 and summary["points"][0]["runs"] == 3
+
+
+@pytest.mark.slow
+def test_a_full_disk_stops_the_study_in_one_line_and_keeps_only_whole_parts(
+    reference, tmp_path, monkeypatch
+) -> None:
+    """The disk fills while the third chunk is written: one line, two whole parts, no temporary
+    files; once there is room again the same study finishes with the uninterrupted table."""
+    import errno
+
+    from swarm.errors import OutputError
+    from swarm.studies import store
+
+    spec, expected = reference
+    out = tmp_path / "full"
+    write_table = store.pq.write_table
+    calls = []
+
+    def filling(table, where, *args, **kwargs):
+        calls.append(where)
+        if len(calls) >= 3:
+            Path(where).write_bytes(b"PAR1 half a part")  # what reached the disk before it filled
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        return write_table(table, where, *args, **kwargs)
+
+    monkeypatch.setattr(store.pq, "write_table", filling)
+    with pytest.raises(OutputError) as caught:
+        run_study(spec, out, workers=1)
+    message = str(caught.value)
+    assert "\n" not in message and "No space left on device" in message
+    assert sorted(p.name for p in (out / "parts").iterdir()) == ["part-000000.parquet", "part-000001.parquet"]
+    assert pq.read_table(out / "parts").num_rows == 4  # chunks of 2 runs, each whole
+    assert not (out / "results.parquet").exists()
+    monkeypatch.setattr(store.pq, "write_table", write_table)
+    table, summary = run_study(spec, out, workers=1)
+    assert _stable(table).equals(_stable(expected))
+    assert summary["runs"] == 10
+
+
+def _descendants(pid: int) -> set[int]:
+    """Processes below `pid` (from /proc): only those this test started may be killed."""
+    parent: dict[int, int] = {}
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        with contextlib.suppress(OSError, ValueError, IndexError):
+            parent[int(stat.parent.name)] = int(stat.read_text().rsplit(")", 1)[1].split()[1])
+    out: set[int] = set()
+    frontier = {pid}
+    while frontier:
+        frontier = {c for c, p in parent.items() if p in frontier} - out
+        out |= frontier
+    return out
+
+
+@pytest.mark.slow
+def test_a_ray_worker_killed_mid_study_is_retried_to_the_same_table(reference, tmp_path) -> None:
+    """kill -9 the Ray worker running a run: Ray runs it again and the table is the same."""
+    pytest.importorskip("ray")  # the `ray` extra; CI installs it
+    import threading
+
+    spec, expected = reference
+    killed: list[int] = []
+    stop = threading.Event()
+
+    def kill_one_worker() -> None:
+        while not stop.is_set() and not killed:
+            for pid in _descendants(os.getpid()):
+                with contextlib.suppress(OSError):
+                    if Path(f"/proc/{pid}/cmdline").read_bytes().startswith(b"ray::run_task"):
+                        os.kill(pid, signal.SIGKILL)
+                        killed.append(pid)
+                        break
+            time.sleep(0.02)
+
+    killer = threading.Thread(target=kill_one_worker, daemon=True)
+    killer.start()
+    try:
+        table, summary = run_study(spec, tmp_path / "ray", backend="ray", workers=2)
+    finally:
+        stop.set()
+        killer.join()
+    assert killed, "no Ray worker was running a run to kill"
+    assert summary["runs"] == 10
+    assert _stable(table).equals(_stable(expected))

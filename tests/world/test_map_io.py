@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import io
 import json
 import math
 from pathlib import Path
@@ -12,7 +13,7 @@ import shapely
 import yaml
 from shapely.geometry import LineString, MultiPolygon, Point, Polygon, box
 
-from swarm.errors import InputError
+from swarm.errors import InputError, OutputError
 from swarm.world import BeachMap, Region, load_map, save_map
 from swarm.world.io import (
     DEM_CLASSES,
@@ -377,7 +378,7 @@ def _set_region(name, spec):
 BOWTIE = [[105, -12], [115, -6], [115, -12], [105, -6]]
 YAML_CASES = {
     "missing-key": (lambda d: d.pop("cell_m"), "cell_m", "nothing"),
-    "unknown-key": (_set("colour", "red"), "colour", "one of the keys"),
+    "unknown-key": (_set("colour", "red"), "colour", "no such key (known keys: name, cell_m, origin_m"),
     "name-type": (_set("name", 12), "name", "12"),
     "negative-cell": (_set("cell_m", -0.5), "cell_m", "-0.5"),
     "cell-text": (_set("cell_m", "1 m"), "cell_m", "'1 m'"),
@@ -523,13 +524,42 @@ def test_bad_grid_names_npz_and_array(tmp_path, case):
     assert "\n" not in str(err.value)
 
 
-def test_npz_that_is_not_an_npz(tmp_path):
+def _damaged(good: bytes) -> bytes:
+    """The archive whole, its first member's compressed bytes overwritten (a bad sector)."""
+    start = good.index(b"PK\x03\x04") + 200
+    return good[:start] + bytes(64) + good[start + 64 :]
+
+
+def _npy(_good: bytes) -> bytes:
+    buf = io.BytesIO()
+    np.save(buf, GOOD_Z)
+    return buf.getvalue()
+
+
+BROKEN_NPZ = {
+    "truncated": (lambda good: good[:3000], "3000 bytes that are not a whole zip archive"),
+    "empty": (lambda good: b"", "an empty file"),
+    "text": (lambda good: b"not a zip", "9 bytes that are not a whole zip archive"),
+    "npy": (_npy, "bytes that are not a whole zip archive"),
+    "damaged": (_damaged, "a damaged archive"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(BROKEN_NPZ))
+def test_a_truncated_empty_or_foreign_grid_is_one_line_naming_it(tmp_path, case):
+    """Issue 15: a truncated grid was a zipfile.BadZipFile traceback."""
     path = tmp_path / "m.yaml"
     save_map(make_map(), path)
-    (tmp_path / "m.npz").write_text("not a zip")
+    grid = tmp_path / "m.npz"
+    corrupt, found = BROKEN_NPZ[case]
+    grid.write_bytes(corrupt(grid.read_bytes()))
     with pytest.raises(InputError) as err:
         load_map(path)
-    assert err.value.source == str(tmp_path / "m.npz")
+    assert err.value.source == str(grid)
+    assert err.value.where == "(file)"
+    assert found in str(err.value.found)
+    assert err.value.expected.startswith("an .npz grid (numpy.savez)")
+    assert "\n" not in str(err.value)
 
 
 def _feature(name, kind, geometry):
@@ -625,7 +655,10 @@ def test_failed_save_leaves_the_old_map_and_no_temp_files(tmp_path, monkeypatch)
         raise OSError(28, "No space left on device")
 
     monkeypatch.setattr(np, "savez_compressed", broken)
-    with pytest.raises(OSError):
+    with pytest.raises(OutputError) as err:
         save_map(make_map(seed=2), path)
+    assert str(err.value) == (
+        f"{tmp_path / 'm.npz'}: could not write it (No space left on device); nothing partial was left"
+    )
     assert {p.name: p.read_bytes() for p in tmp_path.iterdir()} == before
     same_map(make_map(seed=1), load_map(path))

@@ -1,0 +1,307 @@
+"""Fuzzing every kind of input the commands read: from each shipped example (missions, maps and
+their grids, planner profiles, the bundled robot and terrain files, an ESRI ASCII DEM, a study.json
+and a plan.json made here), random mutations go through the loaders the CLI calls. Whatever the
+bytes, the only exception allowed is the project's own `SwarmError`, with a one-line message: the
+CLI prints it and exits 2, with no traceback.
+
+Derandomized (a fixed seed per test) so CI is reproducible; the example counts are in `EXAMPLES`,
+times `SWARM_FUZZ_SCALE` (default 1) for a longer hunt on demand:
+`SWARM_FUZZ_SCALE=20 python -m pytest tests/fuzz --hypothesis-show-statistics`.
+"""
+
+from __future__ import annotations
+
+import functools
+import io
+import json
+import os
+import shutil
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+from mutations import mutated_bytes, mutated_table, mutated_text
+
+from swarm.errors import SwarmError
+from swarm.mission import read_mission_yaml
+from swarm.mission.load import mission_from_dict
+from swarm.planning.profiles import load_profile
+from swarm.robot.params import load_robot
+from swarm.robot.terrain import load_library
+from swarm.world.io import load_map, read_esri_ascii
+
+REPO = Path(__file__).resolve().parents[2]
+DATA = REPO / "swarm" / "data"
+#: Examples per input kind in the default run.
+EXAMPLES = {
+    "mission": 300,
+    "map": 300,
+    "planner": 300,
+    "robot": 300,
+    "terrain": 300,
+    "grid": 300,
+    "dem": 300,
+    "robot run": 300,
+    "study.json": 200,
+    "plan.json": 200,
+}
+
+
+SCALE = int(os.environ.get("SWARM_FUZZ_SCALE", "1"))
+#: Each test runs a few hundred loads: seconds, not minutes; CI runs them with the slow tests. A
+#: warning would be lines on stderr beside the one-line error: it fails the test too.
+pytestmark = [pytest.mark.slow, pytest.mark.filterwarnings("error")]
+
+
+def fuzz(kind: str):
+    return settings(
+        max_examples=EXAMPLES[kind] * SCALE,
+        derandomize=True,
+        deadline=None,
+        database=None,
+        suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large],
+    )
+
+
+def only_our_error(load: Callable[[Path], object], path: Path) -> None:
+    """`load(path)` returns, or raises a `SwarmError` of one line; anything else fails the test."""
+    try:
+        load(path)
+    except SwarmError as exc:
+        message = str(exc)
+        assert message.strip(), f"an empty error message for {path}"
+        assert "\n" not in message, f"a message of more than one line: {message!r}"
+
+
+def _shipped(*patterns: str) -> list[Path]:
+    return sorted(p for pattern in patterns for p in REPO.glob(pattern))
+
+
+@pytest.fixture(scope="module")
+def work(tmp_path_factory) -> Path:
+    """A folder for the mutated files, with the shipped grids beside them (maps refer to them)."""
+    folder = tmp_path_factory.mktemp("fuzz")
+    for grid in _shipped("maps/*.npz"):
+        (folder / grid.name).symlink_to(grid)
+    return folder
+
+
+def _text_kind(kind: str, sources: list[Path], load: Callable[[Path], object]):
+    """A fuzz test of a text input kind: mutate one of `sources`, write it, load it."""
+
+    @fuzz(kind)
+    @given(data=st.data())
+    def test(work: Path, data) -> None:
+        src = data.draw(st.sampled_from(sources), label="source")
+        path = work / src.name
+        path.write_bytes(data.draw(mutated_text(src.read_text(encoding="utf-8")), label="file"))
+        only_our_error(load, path)
+
+    return test
+
+
+# --- missions: the references they name load once (the maps, robots and terrain are fuzzed below) ----
+
+
+@pytest.fixture(scope="module", autouse=True)
+def cached_references():
+    import swarm.planning.profiles as profiles
+    import swarm.robot.params as params
+    import swarm.robot.terrain as terrain
+    import swarm.world.io as world_io
+
+    def cache(load):
+        done: dict = {}
+
+        @functools.wraps(load)
+        def cached(*args):
+            key = tuple(str(a) if isinstance(a, str | Path) else id(a) for a in args)
+            if key not in done:
+                done[key] = load(*args)
+            return done[key]
+
+        return cached
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(world_io, "load_map", cache(world_io.load_map))
+        mp.setattr(params, "load_robot", cache(params.load_robot))
+        mp.setattr(terrain, "load_library", cache(terrain.load_library))
+        mp.setattr(profiles, "load_profile", cache(profiles.load_profile))
+        yield
+
+
+MISSIONS = _shipped("missions/*.yaml")
+
+
+def _load_mission(path: Path) -> object:
+    """`load_mission`, with the references relative to the shipped missions' folder."""
+    return mission_from_dict(read_mission_yaml(path), path, base_dir=REPO / "missions")
+
+
+test_missions = _text_kind("mission", MISSIONS, _load_mission)
+test_maps = _text_kind("map", _shipped("maps/*.yaml"), load_map)
+test_planner_profiles = _text_kind("planner", _shipped("planners/*.yaml"), load_profile)
+test_robots = _text_kind("robot", _shipped("swarm/data/robots/*.yaml"), load_robot)
+test_terrain_modes = _text_kind(
+    "terrain", _shipped("swarm/data/terrain/*.yaml", "swarm/data/terrain_modes.yaml"), load_library
+)
+
+
+# --- binary and other formats ----------------------------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def small_map(work: Path) -> Path:
+    """A 6 x 5 cell map with its grid, to mutate the grid of."""
+    from swarm.world import BeachMap, save_map
+
+    terrain = np.array([[0] * 6, [1] * 6, [2] * 6, [3] * 6, [4] * 6], dtype=np.int8)
+    elevation = np.linspace(-2.0, 3.0, 30, dtype=np.float32).reshape(5, 6)
+    classes = ("deep_water", "surf", "shallow_water", "wet_hard_sand", "soft_sand")
+    path = work / "small.yaml"
+    save_map(BeachMap("small", 2.0, (0.0, 0.0), classes, terrain, elevation, {}), path)
+    return path
+
+
+LIBRARY = load_library()
+
+
+def _npz(arrays: dict[str, np.ndarray]) -> bytes:
+    buf = io.BytesIO()
+    np.savez_compressed(buf, **arrays)
+    return buf.getvalue()
+
+
+@st.composite
+def mutated_grid(draw, original: bytes) -> bytes:
+    """The grid's bytes damaged, or well-formed arrays with the wrong names, types, shapes, values."""
+    if draw(st.booleans()):
+        return draw(mutated_bytes(original))
+    with np.load(io.BytesIO(original)) as npz:
+        arrays = {k: npz[k] for k in npz.files}
+    name = draw(st.sampled_from(sorted(arrays)))
+    how = draw(st.sampled_from(("dtype", "shape", "value", "drop", "extra", "rename", "empty")))
+    a = arrays[name]
+    if how == "dtype":
+        dtypes = [np.int32, np.float64, np.uint8, np.bool_, np.complex64]
+        arrays[name] = a.astype(draw(st.sampled_from(dtypes)))
+    elif how == "shape":
+        arrays[name] = draw(st.sampled_from([a.ravel(), a[:-1], a[None], a.T, a[:, :0]]))
+    elif how == "value":
+        a = a.copy()
+        value = draw(st.sampled_from([np.nan, np.inf, -np.inf, -1, 127, -128, 5, 1e30]))
+        with np.errstate(invalid="ignore", over="ignore"):
+            a.flat[draw(st.integers(0, a.size - 1))] = np.asarray(value).astype(a.dtype)
+        arrays[name] = a
+    elif how == "drop":
+        del arrays[name]
+    elif how == "extra":
+        arrays["slope"] = a
+    elif how == "rename":
+        arrays[name.upper()] = arrays.pop(name)
+    else:
+        arrays = {}
+    return _npz(arrays)
+
+
+@fuzz("grid")
+@given(data=st.data())
+def test_grids(small_map: Path, data) -> None:
+    grid = small_map.with_suffix(".npz")
+    original = getattr(test_grids, "original", None) or grid.read_bytes()
+    test_grids.original = original  # type: ignore[attr-defined]
+    grid.write_bytes(data.draw(mutated_grid(original), label="grid"))
+    only_our_error(lambda p: load_map(p, LIBRARY), small_map)
+
+
+DEM = """ncols 4
+nrows 3
+xllcorner 500000.0
+yllcorner 4100000.0
+cellsize 2.0
+NODATA_value -9999
+1.0 2.0 3.0 4.0
+0.5 1.5 -9999 3.5
+-1.0 -0.5 0.0 0.5
+"""
+
+
+@fuzz("dem")
+@given(text=mutated_table(DEM), fill=st.sampled_from([None, 0.0]))
+def test_dems(work: Path, text: bytes, fill: float | None) -> None:
+    path = work / "dem.asc"
+    path.write_bytes(text)
+    only_our_error(lambda p: read_esri_ascii(p, fill=fill), path)
+
+
+RUNS = DATA / "robot-runs"
+#: The first 40 rows of a shipped run of each format, and its reader (`swarm model validate`).
+ROBOT_RUNS = {
+    "encoders.txt": ("concrete_straight_encoders.txt", "read_encoders"),
+    "truth.txt": ("concrete_straight_truth.txt", "read_truth"),
+    "run.ssv": ("concrete_straight.ssv", "read_ssv"),
+}
+
+
+@fuzz("robot run")
+@given(data=st.data())
+def test_robot_runs(work: Path, data) -> None:
+    import swarm.robot.io as robot_io
+
+    name = data.draw(st.sampled_from(sorted(ROBOT_RUNS)), label="format")
+    source, reader = ROBOT_RUNS[name]
+    original = "".join((RUNS / source).read_text().splitlines(keepends=True)[:40])
+    path = work / name
+    path.write_bytes(data.draw(mutated_table(original), label="file"))
+    only_our_error(getattr(robot_io, reader), path)
+
+
+# --- files swarm wrote and reads back (swarm report, a resumed study) ----------------------------------
+
+
+@pytest.fixture(scope="module")
+def study_json(work: Path) -> Path:
+    from swarm.studies.study import StudySpec
+    from swarm.studies.sweep import parse_sweeps
+
+    spec = StudySpec(str(REPO / "missions" / "landing.yaml"), 3, parse_sweeps(["swarm.count=6,8"]), seed=4)
+    path = work / "study" / "study.json"
+    path.parent.mkdir()
+    path.write_text(json.dumps(spec.as_dict(), indent=1, sort_keys=True) + "\n")
+    return path
+
+
+@fuzz("study.json")
+@given(data=st.data())
+def test_study_json(study_json: Path, data) -> None:
+    from swarm.studies.store import read_study_file
+
+    original = getattr(test_study_json, "original", None) or study_json.read_text()
+    test_study_json.original = original  # type: ignore[attr-defined]
+    study_json.write_bytes(data.draw(mutated_text(original, dump=json.dumps), label="file"))
+    only_our_error(read_study_file, study_json)
+
+
+@pytest.fixture(scope="module")
+def plan_json(work: Path) -> Path:
+    """The landing mission's plan.json, as swarm plan writes it (about a second)."""
+    from swarm.mission import load_mission
+    from swarm.mission.plan import plan_mission, write_plan
+
+    folder = work / "plan"
+    write_plan(plan_mission(load_mission(REPO / "missions" / "landing.yaml"), seed=0, workers=1), folder)
+    shutil.copy(folder / "plan.json", work / "plan.json.orig")
+    return folder / "plan.json"
+
+
+@fuzz("plan.json")
+@given(data=st.data())
+def test_plan_json(plan_json: Path, data) -> None:
+    from swarm.report.load import read_plan
+
+    original = (plan_json.parent.parent / "plan.json.orig").read_text()
+    plan_json.write_bytes(data.draw(mutated_text(original, dump=json.dumps), label="file"))
+    only_our_error(read_plan, plan_json.parent)

@@ -1,0 +1,83 @@
+"""One input mechanism for every file: strict YAML (a repeated key is an error naming it and its
+line; YAML 1.2 numbers), pydantic models, one-line errors."""
+
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+import pytest
+
+from swarm.errors import InputError
+from swarm.mission import read_mission_yaml
+from swarm.planning.profiles import load_profile
+from swarm.robot.params import load_robot
+from swarm.robot.terrain import load_library
+from swarm.world.io import load_map
+
+REPO = Path(__file__).resolve().parents[1]
+DATA = REPO / "swarm" / "data"
+#: A shipped example of each kind of YAML input and the loader the commands call on it.
+KINDS = {
+    "mission": (REPO / "missions" / "landing.yaml", read_mission_yaml),
+    "map": (REPO / "maps" / "test_small.yaml", load_map),
+    "planner profile": (REPO / "planners" / "fast.yaml", load_profile),
+    "robot": (DATA / "robots" / "skid4.yaml", load_robot),
+    "terrain modes": (DATA / "terrain" / "skid4-concrete.yaml", load_library),
+}
+
+
+def _copy(src: Path, tmp: Path) -> Path:
+    """The file in `tmp`, with a map's grid beside it."""
+    if src.parent.name == "maps":
+        shutil.copy(src.with_suffix(".npz"), tmp)
+    return Path(shutil.copy(src, tmp))
+
+
+@pytest.mark.parametrize("kind", list(KINDS))
+def test_a_key_given_twice_is_an_error_naming_it_and_its_line(kind, tmp_path) -> None:
+    src, load = KINDS[kind]
+    path = _copy(src, tmp_path)
+    lines = path.read_text().splitlines()
+    first = next(line for line in lines if line and not line.startswith(("#", " ")))  # a top-level key
+    path.write_text("\n".join([*lines, first]) + "\n")
+    load(src)  # the shipped file loads
+    with pytest.raises(InputError) as err:
+        load(path)
+    key = first.split(":")[0]
+    expected = "expected each key once in a mapping"
+    assert str(err.value) == f"{path}: line {len(lines) + 1}: found {key!r}, {expected}"
+
+
+def test_yaml_1_2_numbers_and_integer_valued_floats_for_counts(tmp_path) -> None:
+    """Issue 15: `iterations: 2e4` was the string '2e4' and refused."""
+    path = tmp_path / "p.yaml"
+    path.write_text("planner: RRTConnect\nbudget:\n  iterations: 2e4\n  time_s: 1.5e0\n")
+    profile = load_profile(path)
+    assert profile.iterations == 20000 and isinstance(profile.iterations, int)
+    assert profile.time_s == 1.5
+    path.write_text("planner: RRTConnect\nbudget:\n  iterations: 2.5e1\n")
+    profile = load_profile(path)
+    assert profile.iterations == 25
+    path.write_text("planner: RRTConnect\nbudget:\n  iterations: 2.05e1\n")
+    with pytest.raises(InputError) as err:
+        load_profile(path)
+    assert str(err.value) == f"{path}: budget.iterations: found 20.5, expected a whole number"
+    path.write_text("planner: RRTConnect\nbudget:\n  iterations: .inf\n")
+    with pytest.raises(InputError, match=r"budget\.iterations: found inf, expected a whole number"):
+        load_profile(path)
+
+
+def test_an_empty_file_and_a_union_name_what_was_meant(tmp_path) -> None:
+    empty = tmp_path / "empty.yaml"
+    empty.write_text("# nothing\n")
+    with pytest.raises(InputError) as err:
+        load_profile(empty)
+    found = "found 'an empty file', expected a mapping (keys: "
+    assert str(err.value).startswith(f"{empty}: (top level): {found}")
+    # regions: a mapping is reported against the mapping form, not as 'expected a string'
+    src = _copy(REPO / "maps" / "test_small.yaml", tmp_path)
+    src.write_text(src.read_text().replace("    kind: launch\n", "    kind: launchpad\n", 1))
+    with pytest.raises(InputError) as err:
+        load_map(src)
+    assert ".kind: found 'launchpad', expected one of 'launch'," in str(err.value)
