@@ -131,14 +131,20 @@ class RobotSpec(_Model):
     )
 
 
+#: The largest swarm a mission may launch: memory, not the schema, is the real limit
+#: (`swarm.sim.memory`); this bound only keeps a typo (an extra zero or two) from being planned.
+MAX_ROBOTS = 100_000
+
+
 class SwarmSpec(_Model):
     """How many robots."""
 
     count: int = Field(
         ge=1,
-        le=1000,
+        le=MAX_ROBOTS,
         description="Robots launched. Losing some is expected (thesis 1.2): size the swarm for the "
-        "tasks plus the losses the hazards will take.",
+        "tasks plus the losses the hazards will take. A run that would not fit in memory is refused "
+        "with an estimate before it starts.",
     )
 
 

@@ -77,7 +77,14 @@ def test_shipped_mission_loads(path):
     assert mission.name == path.stem
     assert mission.source == str(path)
     assert isinstance(mission.beach_map, BeachMap)
-    assert 12 <= mission.swarm.count <= 30
+    # robots enough for every task's fixed demand (the rest search, wait in reserve or stand by)
+    fixed = sum(
+        t.robots_per_zone * len(t.zones) if t.type == "landing"
+        else t.robots_per_point * len(t.points) if t.type in ("surveillance", "beacon")
+        else (t.robots or 1) if t.type == "search" else 1
+        for t in mission.tasks
+    )  # fmt: skip
+    assert mission.swarm.count >= fixed
     assert mission.tasks
     assert mission.resolved("map_path").is_file()
     assert mission.robot_params.mass_kg > 0
@@ -535,3 +542,19 @@ def test_bad_override_value_names_the_override(monkeypatch):
     err = error_of(small_mission(), monkeypatch, overrides={"tasks.0.zones.1": "landing_z"})
     assert err.source == "overrides (over missions/x.yaml)"
     assert err.where == "tasks[0].zones[1]"
+
+
+def test_ten_thousand_robots_are_a_valid_swarm_and_a_typo_is_not(monkeypatch):
+    """The schema no longer stops at 1,000 robots (memory decides, `swarm.sim.memory`); it still
+    refuses a count no machine could run, as one line naming the bound."""
+    from swarm.mission.schema import MAX_ROBOTS
+
+    monkeypatch.chdir(REPO)
+    mission = mission_from_dict(small_mission(), "missions/x.yaml", overrides={"swarm.count": 10_000})
+    assert mission.swarm.count == 10_000
+    typo = 10 * MAX_ROBOTS
+    err = error_of(small_mission(), monkeypatch, overrides={"swarm.count": typo}, overrides_source="--set")
+    assert (
+        str(err)
+        == f"--set (over missions/x.yaml): swarm.count: found {typo}, expected a whole number <= {MAX_ROBOTS}"
+    )
