@@ -40,7 +40,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import shapely
-from scipy import optimize
+from scipy import optimize, stats
 from scipy.special import erf
 from scipy.stats import binom
 from shapely.geometry.base import BaseGeometry
@@ -310,28 +310,42 @@ def search_window_s(mission: Mission, task, start_s: float) -> tuple[float, floa
     return start_s, end
 
 
-def detection_needed(criterion: float, mines: float, confidence: float = DESIGN_CONFIDENCE) -> float:
-    """The least per-mine detection probability p with P(Binomial(N, p) >= criterion x N) >=
-    `confidence` (N the expected mine count, rounded); the criterion itself without mines."""
-    n = round(mines)
-    if n <= 0:
+def detection_needed(
+    criterion: float, mines: float, confidence: float = DESIGN_CONFIDENCE, *, poisson: bool = False
+) -> float:
+    """The least per-mine detection probability p with P(detected fraction >= criterion) >=
+    `confidence` (`p_criterion_met`); the criterion itself without mines."""
+    if mines <= 0 or (not poisson and round(mines) <= 0):
         return criterion
-    need = math.ceil(criterion * n - 1e-9)
 
     def short(p: float) -> float:
-        return float(binom.sf(need - 1, n, p)) - confidence
+        return p_criterion_met(criterion, mines, p, poisson=poisson) - confidence
 
     if short(1.0 - 1e-12) < 0:
         return 1.0
     return float(optimize.brentq(short, 1e-9, 1.0 - 1e-12, xtol=1e-6))
 
 
-def p_criterion_met(criterion: float, mines: float, p: float) -> float:
-    """P(detected fraction >= criterion) for round(`mines`) mines each found with probability p."""
-    n = round(mines)
-    if n <= 0:
-        return 1.0 if p >= criterion else 0.0
-    return float(binom.sf(math.ceil(criterion * n - 1e-9) - 1, n, min(max(p, 0.0), 1.0)))
+def p_criterion_met(criterion: float, mines: float, p: float, *, poisson: bool = False) -> float:
+    """P(detected fraction >= criterion) when each mine is found with probability p: binomial for
+    round(`mines`) mines, or, with `poisson` (a mine density: the count of a run is Poisson with
+    mean `mines`), the binomial averaged over that count. A field with few mines asks for more: at
+    a 0.9 criterion, 7 mines must all be found, 14 may miss one (no mines: met)."""
+    p = min(max(p, 0.0), 1.0)
+    if not poisson:
+        n = round(mines)
+        if n <= 0:
+            return 1.0 if p >= criterion else 0.0
+        return float(binom.sf(math.ceil(criterion * n - 1e-9) - 1, n, p))
+    counts = np.arange(int(mines + 10.0 * math.sqrt(mines) + 10.0) + 1)
+    need = np.ceil(criterion * counts - 1e-9)
+    met = np.where(counts > 0, binom.sf(need - 1, counts, p), 1.0)
+    return float(np.sum(stats.poisson.pmf(counts, mines) * met))
+
+
+def mine_count_is_random(mission: Mission) -> bool:
+    """Whether each run draws its own mine count (a density; `swarm.sim.mines.lay_mines`)."""
+    return mission.hazards.mines.count is None
 
 
 def nominal_detection(model: str, width_m: float, spacing_m: float) -> float:
@@ -364,7 +378,12 @@ def design_search(
     window = search_window_s(mission, task, start_s)
     span = max(window[1] - window[0], 1.0)
     mines = expected_mine_count(mission)
-    target = detection_needed(mission.success.min_detection_fraction, mines, task.detection_confidence)
+    target = detection_needed(
+        mission.success.min_detection_fraction,
+        mines,
+        task.detection_confidence,
+        poisson=mine_count_is_random(mission),
+    )
     model = "random" if task.sensor.model == "random_search" else task.sensor.model
     w = task.sensor.width_m
     overhead = 1.0 + TURN_S * speed_mps / max(row_m, 1.0)

@@ -536,7 +536,10 @@ def _plan_search(
         nominal_detection=budget.nominal_detection(model, width, spacing),
         reachable_detection=reach,
         p_criterion_met=budget.p_criterion_met(
-            mission.success.min_detection_fraction, design.mines_expected, expected
+            mission.success.min_detection_fraction,
+            design.mines_expected,
+            expected,
+            poisson=budget.mine_count_is_random(mission),
         ),
     )
     out = SearchPlan(
@@ -790,13 +793,16 @@ def _budget(mission: Mission, plan: MissionPlan) -> dict:
         after = s.expected_detection * min(1.0, capacity / need if need > 0 else 1.0)
         if mines > 0:
             after = max(0.0, after - triggered / mines)
-        s.design["p_criterion_met"] = budget.p_criterion_met(criterion, mines, s.expected_detection)
+        random_count = budget.mine_count_is_random(mission)
+        as_planned = budget.p_criterion_met(criterion, mines, s.expected_detection, poisson=random_count)
+        after_losses = budget.p_criterion_met(criterion, mines, after, poisson=random_count)
+        s.design["p_criterion_met"] = as_planned
         searches[s.task] = {
             "criterion": criterion,
             "expected_detection": s.expected_detection,
             "expected_detection_after_losses": after,
-            "p_criterion_met": budget.p_criterion_met(criterion, mines, s.expected_detection),
-            "p_criterion_met_after_losses": budget.p_criterion_met(criterion, mines, after),
+            "p_criterion_met": as_planned,
+            "p_criterion_met_after_losses": after_losses,
             "expected_team_losses": lost_by_task.get(s.task, 0.0),
             "reserves": s.design["reserves"],
         }

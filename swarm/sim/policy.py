@@ -192,7 +192,7 @@ class ScriptedPolicy:
             return
         role = int(env.role[i])
         if role in STATIONS:
-            goal = env._route_goal()[i]
+            goal = self._station_of(i)
             if role == LANDING and not env.score.zone_still_open(goal):
                 return  # its zone has held its robots: the spares are wanted elsewhere
             self.items.append(WorkItem("route", ROLES[role], goal.copy(), goal[None].copy(),
@@ -201,6 +201,13 @@ class ScriptedPolicy:
             for piece in split_polyline(env.routes.remaining_track(i), TAKEOVER_PIECE_M):
                 self.items.append(WorkItem("route", "search", piece[0].copy(), piece, track=True,
                                            audience=audience, created_s=t))  # fmt: skip
+
+    def _station_of(self, i: int) -> np.ndarray:
+        """Where robot i's station is: the end of its route, or, while it is away for the
+        clearance, the end of the route it will resume (a beacon robot lost while clear of the
+        blast used to hand its retreat point, not its beacon, to the robot taking over)."""
+        held = self._held.get(i)
+        return held[0][-1].copy() if held is not None else self.env._route_goal()[i]
 
     def _on_loss(self, i: int) -> None:
         """Ashore, a loss is known to the robot's radio component. A robot lost before it reached

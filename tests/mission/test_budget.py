@@ -172,3 +172,19 @@ def test_a_surer_search_asks_for_more_detection_and_tighter_tracks(mission) -> N
     n = round(usual.mines_expected)
     need = math.ceil(mission.success.min_detection_fraction * n - 1e-9)
     assert binom.sf(need - 1, n, surer.target_detection) == pytest.approx(0.99, abs=1e-4)
+
+
+def test_a_poisson_mine_count_is_averaged_over() -> None:
+    """With a mine density each run draws its own count N ~ Poisson(lambda). If every mine must be
+    found, P(met) = E[p^N] = exp(-lambda (1 - p)), the Poisson generating function. At full_conops's
+    0.9 criterion and lambda = 14 the plan's old binomial at N = 14 (one miss allowed) promised more
+    than the runs gave: a run with 7 mines must find all 7."""
+    for lam, p in ((14.0, 0.985), (3.0, 0.9), (40.0, 0.99)):
+        got = budget.p_criterion_met(1.0, lam, p, poisson=True)
+        assert got == pytest.approx(math.exp(-lam * (1.0 - p)), rel=1e-9)
+    mixed = budget.p_criterion_met(0.9, 14.0, 0.985, poisson=True)
+    fixed = budget.p_criterion_met(0.9, 14.0, 0.985)
+    assert mixed < fixed - 0.005
+    need = budget.detection_needed(0.9, 14.0, 0.95, poisson=True)
+    assert budget.p_criterion_met(0.9, 14.0, need, poisson=True) == pytest.approx(0.95, abs=1e-4)
+    assert need > budget.detection_needed(0.9, 14.0, 0.95)

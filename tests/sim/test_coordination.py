@@ -494,3 +494,30 @@ def test_a_robot_keeps_station_at_the_end_of_its_route(mine_clear_env) -> None:
     env.robot_state[0, :2] = station + np.array([-2.0, 0.0])  # 2 m behind it, facing it
     wheels, _ = env.controller_commands()
     assert wheels[0, 0] > 0 and wheels[0, 1] > 0
+
+
+@pytest.mark.slow
+def test_a_station_robot_lost_while_clear_of_the_blast_hands_on_its_station(mine_clear_env) -> None:
+    """A beacon robot lost while it waited clear of a marked mine's standoff: the work it leaves is
+    its beacon point, not the point it retreated to (on full_conops the robot that took it over
+    drove to the retreat point, 100 m from the beacon, and the beacon criterion failed)."""
+    env, policy = mine_clear_env
+    env.reset(seed=1)
+    policy.reset()
+    station, mine = np.array([480.0, 110.0]), np.array([485.5, 99.5])
+    env.objects_m = mine[None].copy()
+    env.object_marker = np.array([1])
+    env.object_mine = np.array([-1])
+    env.on_map[:] = False
+    env.on_map[0] = True
+    env.robot_state[0, :2] = station
+    env.set_route(0, station[None], role="beacon")
+    env.routes.advance(env.robot_state[:, :2], env.on_map)
+    policy._hold(300.0, 30.0)
+    env.robot_state[0, :2] = env.routes.points[env.routes.end[0] - 1]  # at its retreat point
+    policy._seen = len(env.events)
+    env.lose("robot_0")
+    policy._read_events()
+    (item,) = [it for it in policy.items if it.kind == "route"]
+    assert item.role == "beacon"
+    assert np.hypot(*(item.start_m - station)) < 1e-9, item.start_m
