@@ -10,7 +10,9 @@ The coefficients are measured (tracemalloc peaks, on this code, `benchmarks/` st
   about 32 bytes per robot per logged sample (every `RECORD_EVERY_S` of mission time: position,
   heading, alive, phase and role, held in lists and then copied into arrays);
 
-rounded up, plus a fixed amount per robot for its state, route and sensors.
+rounded up, plus a fixed amount per robot for its plan, state, route and sensors: 512 kB, from
+`benchmarks/bench_scale.py` (beach_swarm on gentle_fine: peak 371 MB with 1,000 robots, 4.4 GB
+with 10,000, about 445 kB more per robot).
 """
 
 from __future__ import annotations
@@ -23,7 +25,7 @@ from swarm.mission.schema import Mission
 PLAN_BYTES_PER_CELL = 1300
 SIM_BYTES_PER_CELL = 300
 BYTES_PER_ROBOT_SAMPLE = 40
-BYTES_PER_ROBOT = 64 * 1024
+BYTES_PER_ROBOT = 512 * 1024
 #: Mission seconds between logged samples (`swarm.sim.run.RECORD_EVERY_S`).
 RECORD_EVERY_S = 2.0
 
