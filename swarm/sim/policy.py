@@ -25,7 +25,9 @@ It drives the environment in command mode. Each step it:
    marked mine's standoff (on dry ground, out of the breakers, where there is any), a robot still
    on its way to mark a mine turns back when it cannot get there in time, and everyone else holds
    until the detonation, then resumes: the rest of its route, or back to its station. Before that, a
-   robot with nothing to do waits clear of every found mine's standoff.
+   robot with nothing to do waits clear of every found mine's standoff; after it (or with no
+   clearance), the nearest robot with nothing to do stands by at each point that must be held at
+   the end (a beacon), so a loss in the last minutes leaves it held.
 5. At the end of beach operations (with the return to sea enabled), and for any robot whose battery
    falls to the reserve, the command is "return to sea".
 """
@@ -41,6 +43,7 @@ from scipy.sparse import csr_matrix
 from scipy.spatial import cKDTree
 
 from swarm.planning.allocation import auction
+from swarm.sim.criteria import STATION_RADIUS_M
 from swarm.sim.env import FOLLOW, LOITER, MARK, RETURN, RETURNING, SEA, SwarmEnv
 from swarm.sim.layout import ROLES
 from swarm.sim.standoff import SafeGround, free_cell_graph
@@ -284,6 +287,32 @@ class ScriptedPolicy:
             if due and free.any():
                 self._auction(due, free)
         self._park(self._idle())
+        self._stand_by(self._idle())
+
+    def _stand_by(self, idle: np.ndarray) -> None:
+        """Once no clearance is pending, a point that must be held at the end of beach operations
+        (a beacon without `hold_s`) gets one robot more than it needs, the nearest idle one: a
+        beacon robot lost in the last minutes cannot be replaced from across the beach in time
+        (full_conops failed its beacon criterion that way). A stand-by stays idle: it takes over
+        like any other, and another comes when it leaves."""
+        env = self.env
+        if self._returning or not idle.any():
+            return
+        if env.clearance is not None and self._clearance_state != "done":
+            return
+        goals = env._route_goal()
+        here = env.alive & env.on_map
+        for st in env.score.beacons:
+            if st.required_s is not None:
+                continue
+            for point in st.points_m:
+                near = here & (np.hypot(*(goals - point).T) <= STATION_RADIUS_M)
+                if np.count_nonzero(near) > st.needed or not idle.any():
+                    continue
+                cand = np.flatnonzero(idle)
+                i = int(cand[np.argmin(np.hypot(*(env.robot_state[cand, :2] - point).T))])
+                env.set_route(i, env.router.route(env.robot_state[i, :2], point))
+                idle[i] = False
 
     def _park(self, idle: np.ndarray) -> None:
         """Idle robots wait clear of the standoff of every mine found so far while a clearance is

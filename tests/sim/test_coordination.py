@@ -521,3 +521,24 @@ def test_a_station_robot_lost_while_clear_of_the_blast_hands_on_its_station(mine
     (item,) = [it for it in policy.items if it.kind == "route"]
     assert item.role == "beacon"
     assert np.hypot(*(item.start_m - station)) < 1e-9, item.start_m
+
+
+@pytest.mark.slow
+def test_a_beacon_held_at_the_end_has_a_stand_by_and_survives_a_late_loss(tmp_path) -> None:
+    """A beacon counts if it is held when beach operations end. A robot with nothing to do stands
+    by at it, so losing the beacon robot 20 s before the end leaves the point held; without the
+    stand-by nobody could get there in time (full_conops failed its beacon criterion that way)."""
+    beacon = {"type": "beacon", "points": [[55.0, 52.0]], "robots_per_point": 1}
+    path = write_mission(tmp_path, swarm={"count": 3}, tasks=[beacon], hazards=QUIET)
+    env = SwarmEnv(load_mission(path), action_mode="command")
+    policy = ScriptedPolicy(env)
+    env.reset(seed=0)
+    end = env.mission.phases.beach_end_s
+    _run(env, policy, end - 20.0)
+    point = np.array([55.0, 52.0])
+    near = env.alive & (np.hypot(*(env.robot_state[:, :2] - point).T) <= 3.0)
+    assert np.count_nonzero(near) >= 2
+    holder = next(r for r in env.plan.robots if r.role == "beacon")
+    env.lose(holder.id)
+    _run(env, policy, env.time_limit_s + 1)
+    assert env.outcome()["criteria"]["beacon"]["value"] == 1.0
