@@ -52,7 +52,12 @@ def _parser() -> argparse.ArgumentParser:
         "--fixed-step",
         type=float,
         metavar="DT_S",
-        help="skid model: fixed step (s) instead of the adaptive integrator",
+        help="skid model: integration step (s); default 0.005, the step calibration uses",
+    )
+    validate.add_argument(
+        "--adaptive",
+        action="store_true",
+        help="skid model: adaptive LSODA, its step bounded by --fixed-step, instead of fixed steps",
     )
     validate.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
     validate.add_argument(
@@ -253,7 +258,9 @@ def _cmd_validate(args: argparse.Namespace) -> int:
     models = [args.model] + (
         [m for m in ("skid", "kinematic", "lagrangian") if m != args.model] if args.compare else []
     )
-    opts = {} if args.fixed_step is None else {"adaptive": False, "dt_s": args.fixed_step}
+    if args.fixed_step is not None and not 0 < args.fixed_step <= 0.1:
+        raise InputError("command line", "--fixed-step", args.fixed_step, "a step in (0, 0.1] seconds")
+    opts = {"adaptive": args.adaptive, **({} if args.fixed_step is None else {"dt_s": args.fixed_step})}
     results = {m: validate(run, robot, mode, m, **(opts if m == "skid" else {})) for m in models}
     scores = {m: r[0] for m, r in results.items()}
     if args.plot is not None:

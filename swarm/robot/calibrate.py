@@ -142,19 +142,7 @@ class _Problem:
         return np.concatenate([data, prior], axis=1)
 
     def _skid_batch(self, run: Run, ps: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        sim = SkidModel(self.robot)
-        coeffs = coeffs_for([self.mode_for(p) for p in ps])
-        state0 = np.zeros((len(ps), 6))
-        state0[:, :3] = run.pose0
-        k = len(ps)
-        t, states = sim.simulate_fixed(
-            state0,
-            lambda a, b: np.broadcast_to(run.wheels.mean_speeds(a, b), (k, 2)),
-            coeffs,
-            run.wheels.duration_s,
-            self.dt_s,
-        )
-        return t, states[:, :, :3]
+        return predicted_poses(run, self.robot, [self.mode_for(p) for p in ps], self.dt_s)
 
     def _thesis_batch(self, run: Run, ps: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         fn = kinematic if self.model == "kinematic" else lagrangian
@@ -182,6 +170,28 @@ class _Problem:
             rows_all = self.residuals_batch(np.vstack([p[None], batch]))
             base, rows = rows_all[0], rows_all[1:]
         return ((rows - base[None, :]) / steps[:, None]).T
+
+
+def predicted_poses(
+    run: Run, robot: RobotParams, modes: Sequence[TerrainMode], dt_s: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """The skid model's poses over `run` on each of `modes` at once, one robot per mode.
+
+    Returns times (k,) and poses (k, len(modes), 3). The fixed-step integration that validation
+    (`predict`) runs, vectorized over the modes so a finite-difference Jacobian costs one run.
+    """
+    sim = SkidModel(robot)
+    state0 = np.zeros((len(modes), 6))
+    state0[:, :3] = run.pose0
+    k = len(modes)
+    t, states = sim.simulate_fixed(
+        state0,
+        lambda a, b: np.broadcast_to(run.wheels.mean_speeds(a, b), (k, 2)),
+        coeffs_for(list(modes)),
+        run.wheels.duration_s,
+        dt_s,
+    )
+    return t, states[:, :, :3]
 
 
 def calibrate(
