@@ -181,9 +181,8 @@ def predicted_poses(
     (`predict`) runs, vectorized over the modes so a finite-difference Jacobian costs one run.
     """
     sim = SkidModel(robot)
-    state0 = np.zeros((len(modes), 6))
-    state0[:, :3] = run.pose0
     k = len(modes)
+    state0 = sim.state_at_rest(np.broadcast_to(run.pose0, (k, 3)))
     t, states = sim.simulate_fixed(
         state0,
         lambda a, b: np.broadcast_to(run.wheels.mean_speeds(a, b), (k, 2)),
@@ -191,7 +190,7 @@ def predicted_poses(
         run.wheels.duration_s,
         dt_s,
     )
-    return t, states[:, :, :3]
+    return t, sim.wheel_centre_pose(states)
 
 
 def calibrate(

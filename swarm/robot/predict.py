@@ -81,8 +81,7 @@ def _skid(
     dt_s: float,
 ) -> Trajectory:
     sim = SkidModel(robot)
-    state0 = np.zeros((1, 6))
-    state0[0, :3] = pose0
+    state0 = sim.state_at_rest(np.array([pose0]))
     coeffs = coeffs_for(mode)
     if adaptive:
         n_out = max(2, int(np.ceil(wheels.duration_s / 0.01)) + 1)
@@ -94,4 +93,5 @@ def _skid(
         t, states = sim.simulate_fixed(
             state0, lambda a, b: wheels.mean_speeds(a, b)[None], coeffs, wheels.duration_s, dt_s
         )
-    return Trajectory(t, states[:, 0, 0], states[:, 0, 1], states[:, 0, 2])
+    pose = sim.wheel_centre_pose(states[:, 0])
+    return Trajectory(t, pose[:, 0], pose[:, 1], pose[:, 2])
