@@ -5,35 +5,38 @@ the left and right wheel angular velocities (velocity-controlled motors, as the 
 
 Each of the four wheel contacts (two per side, at +-wheelbase/2 and +-track/2 from the wheel
 centre; the state's origin is the centre of mass, `RobotParams.com_x_m`/`com_y_m` from it) slips
-relative to the ground. Its slip is the contact-point velocity minus the wheel's surface speed,
-over the contact's rolling speed (the longitudinal slip ratio and the tangent of the slip angle).
-Friction follows Janosi-Hanamoto, mu N (1 - exp(-s / k)), along the slip direction as a friction
-ellipse, `mu_peak` forward and `mu_lateral` sideways; with k = K / l the shear displacement of
-the patch (Wong & Chiang 2001), so the lateral resistance rises as the turn tightens, from a
-fraction of mu N in wide arcs to mu N in pivots: the turning-radius dependence Wong & Chiang
-derive and Steeds' empirical mu_t = mu_max / (0.925 + 0.15 R / B) summarises [Wong08, ch. 7]. N
-is each contact's own load (`params.wheel_loads`: centre of mass, load transfer).
+relative to the ground. Its slip velocity is the contact-point velocity minus the wheel's surface
+speed, plus a third component rho * r for the patch spinning with the body (rho =
+turning_resistance_m / mu_lateral, an effective patch radius); the combined slip is that vector
+over the contact's rolling speed: the longitudinal slip ratio, the tangent of the slip angle, and
+the patch's turn slip rho r / V (Pacejka, Tyre and Vehicle Dynamics, 3rd ed., 2012, sec. 4.3:
+phi = r / V). Friction follows Janosi-Hanamoto, mu N (1 - exp(-s / k)), shared along the slip
+direction as a friction ellipsoid: `mu_peak` forward, `mu_lateral` sideways, and a spin (bore)
+moment of up to turning_resistance_m * N per patch (the Howe & Cutkosky 1996 ellipsoidal limit
+surface of a sliding patch), so a patch that slides sideways has less left to resist spinning.
+N is each contact's own load (`params.wheel_loads`: centre of mass, load transfer).
 
-Each patch also bores: a yaw moment turning_resistance_m * N (1 - exp(-s_t / k)) against the
-body's yaw rate, with s_t = rho |r| / V the patch's turn slip (Pacejka, Tyre and Vehicle
-Dynamics, 2012, sec. 4.3: phi = r / V, times the effective patch radius rho =
-turning_resistance_m / mu_lateral). The bore torque has its own budget, added to the lateral
-forces' moment as the classical skid-steer moment balance adds the turning-resistance moment
-[Wong08 ch. 7; Yu10; Kozlowski & Pazderski 2004]. (It shared the lateral friction ellipse
-until issue 14; MuJoCo's and Bullet's torsional friction both act as a separate budget: in
-MuJoCo, torsional friction 0.147 m cut a pivot, a 1 m arc and a wide arc by 27, 30 and 29%,
-where the shared ellipse gave 18, 18 and 20% and the separate budget 26, 32 and 26%.) So a
-pivot meets the full bore torque, a wide arc (small turn slip) little of it: the ICR spread
-that Mandow et al. (2007) fit as one constant per terrain comes out of the friction, varying with
-the motion as Rabiee & Biswas (2019) found it does.
+How turning depends on radius and load comes out of this, as in Wong & Chiang's theory of skid
+steering ("A general theory for skid steering of tracked vehicles on firm ground", Proc. IMechE
+D 215, 2001): k = K / l is the patch's shear displacement modulus over its length, so in a wide
+arc (small lateral slip and turn slip) the lateral and spin resistances are a fraction of mu N
+and rise toward it as the turn tightens to a pivot, the dependence Steeds' empirical
+mu_t = mu_max / (0.925 + 0.15 R / B) summarises [Wong08, ch. 7]; each contact resists in
+proportion to its load. The ICR spread Mandow et al. (IROS 2007) fit as one constant per terrain
+thus varies with the motion, as Rabiee & Biswas (ICRA 2019) found it does.
+
+(Tried for issue 14 and not kept: a bore torque on its own budget, added to the lateral forces'
+moment as the classical moment balance adds its turning-resistance moment. It matched MuJoCo's
+torsional friction better on hard ground, but calibrated on a square it predicted MuJoCo's soft-
+sand square-spiral-line with 6.1% path RMSE against the shared ellipsoid's 1.9%.)
 
 Rolling resistance c_rr N opposes each contact's rolling. Water carries part of the weight
 (`buoyancy_fraction`) and drags the hull quadratically. An external body-frame wrench (Fx, Fy,
 Mz) and a normal-load scale per robot bring in slopes, jet thrust, currents and waves.
+`turning_resistance_moment` gives the lateral forces' yaw moment (mu W l / 2 at full sliding for
+point contacts).
 
-[Wong08] J. Y. Wong, Theory of Ground Vehicles, 4th ed., 2008. Wong & Chiang, "A general theory
-for skid steering of tracked vehicles on firm ground", Proc. IMechE D 215, 2001. [Yu10] W. Yu et
-al., IEEE T-RO 26(2), 2010. Mandow et al., IROS 2007. Rabiee & Biswas, ICRA 2019.
+[Wong08] J. Y. Wong, Theory of Ground Vehicles, 4th ed., Wiley, 2008.
 
 Two integrators: `step` advances n robots by one fixed step with a linearly implicit scheme
 (contact and drag forces frozen at their secant slope, then the 3x3 velocity system solved in
@@ -174,8 +177,10 @@ class SkidModel:
         sx = vx - w
         rolling = np.maximum(np.abs(w), np.abs(vx))
         rolling += reg
-        # combined slip of each contact (side, axle, n): the slip velocity over the rolling speed
-        slip = np.sqrt((sx * sx)[:, None, :] + (vy * vy)[None, :, :])
+        # combined slip of each contact (side, axle, n): the slip velocity, with the patch's spin
+        # r * rho as a third component sharing the same friction budget, over the rolling speed
+        spin = g.spin_m * r
+        slip = np.sqrt((sx * sx + spin * spin)[:, None, :] + (vy * vy)[None, :, :])
         slip /= rolling[:, None, :]
         np.maximum(slip, 1e-12, out=slip)
         # Janosi-Hanamoto traction over slip, (1 - exp(-s/k)) / s, times the load over rolling speed
@@ -183,15 +188,6 @@ class SkidModel:
         secant /= slip
         secant *= -g.load_n / rolling[:, None, :]
         axle_sum = secant[0] + secant[1]
-        # bore torque: turn slip rho |r| / V of each side's patches on the same shear curve, its
-        # own budget turning_resistance_m * N (the classical turning-resistance moment)
-        spin = np.abs(r) * g.spin_m / rolling
-        np.maximum(spin, 1e-12, out=spin)
-        spin_secant = np.expm1(spin / -g.shear_slip)
-        spin_secant /= spin
-        spin_secant /= rolling
-        side_load = 2.0 * g.load_n if np.ndim(g.load_n) == 1 else g.load_n[:, 0] + g.load_n[:, 1]
-        spin_secant *= side_load
         return _Contacts(
             vx=vx,
             w=w,
@@ -200,7 +196,7 @@ class SkidModel:
             kx_side=g.mu_peak * (secant[:, 0] + secant[:, 1]),
             ky_axle=g.mu_lateral * axle_sum,
             k_roll=g.roll_n / np.sqrt(vx * vx + reg * reg),
-            k_spin=-g.mu_lateral * g.spin_m * g.spin_m * (spin_secant[0] + spin_secant[1]),
+            k_spin=g.mu_lateral * g.spin_m * g.spin_m * (axle_sum[0] + axle_sum[1]),
         )
 
     def _damping(self, state: np.ndarray, g: _Ground) -> tuple[np.ndarray, np.ndarray]:

@@ -283,41 +283,17 @@ def test_deep_water_has_no_traction_but_drags() -> None:
     assert state[0, 3] == pytest.approx(1.0 / (1 + cd * 1.0 * 1.0 / ROBOT.mass_kg), rel=0.02)
 
 
-def test_bore_torque_adds_to_the_lateral_resistance_with_its_own_budget() -> None:
+def test_spin_and_lateral_friction_share_one_friction_ellipsoid() -> None:
     """Pivoting with the wheels turning exactly as fast as the body spins (no longitudinal slip),
-    each patch slides sideways at b r (mu_lat N) and bores (turning_resistance_m N): the classical
-    skid-steer moment balance adds the two [Wong08 ch. 7; Yu10], M = W (mu_lat b + turning)."""
+    each patch slides sideways at b r and spins at rho r; at full sliding they share mu_lat N, so
+    the yaw moment is mu_lat W sqrt(b^2 + rho^2), rho = turning_resistance_m / mu_lat."""
     mu, turn = 0.5, 0.06
     mode = ground(mu_lateral=mu, turning_resistance_m=turn, shear_slip=1e-4, rolling_resistance=0.0)
     model = SkidModel(ROBOT, regularization_mps=1e-9)
     r, a, b = 1.5, ROBOT.track_width_m / 2, ROBOT.wheelbase_m / 2
     wheel = a * r / ROBOT.wheel_radius_m
     d = model.derivatives(np.array([[0, 0, 0, 0, 0, r]]), np.array([[-wheel, wheel]]), coeffs_for(mode))[0]
-    expected = -ROBOT.mass_kg * GRAVITY_MPS2 * (mu * b + turn)
+    rho = turn / mu
+    expected = -mu * ROBOT.mass_kg * GRAVITY_MPS2 * math.hypot(b, rho)
     assert d[5] * ROBOT.yaw_inertia_kgm2 == pytest.approx(expected, rel=1e-3)
     assert abs(d[3]) < 1e-9 and abs(d[4]) < 1e-9
-
-
-def test_bore_torque_follows_the_turn_slip() -> None:
-    """The bore moment is turning_resistance_m N (1 - exp(-s_t / k)) per patch, s_t = rho r / V
-    (Pacejka's turn slip times the patch radius): a wide arc feels a fraction, a pivot all of it."""
-    mu, turn, k = 0.8, 0.1, 0.05
-    model = SkidModel(ROBOT, regularization_mps=1e-9)
-    weight = ROBOT.mass_kg * GRAVITY_MPS2
-    a = ROBOT.track_width_m / 2
-    for u, r in ((0.6, 0.1), (0.6, 0.6), (0.0, 1.5)):
-        # wheels rolling exactly with their contacts: no longitudinal slip, so the rolling speed
-        # V of each side is its contact's speed
-        wheels = np.array([[(u - a * r), (u + a * r)]]) / ROBOT.wheel_radius_m
-        state = np.array([[0, 0, 0, u, 0, r]], dtype=float)
-        moments = []
-        for tr in (turn, 0.0):
-            mode = ground(mu_lateral=mu, turning_resistance_m=tr, shear_slip=k, rolling_resistance=0.0)
-            moments.append(model.derivatives(state, wheels, coeffs_for(mode))[0, 5] * ROBOT.yaw_inertia_kgm2)
-        rho = turn / mu
-        expected = -sum(
-            turn * weight / 2 * (1 - math.exp(-rho * r / abs(speed) / k)) for speed in (u - a * r, u + a * r)
-        )
-        assert moments[0] - moments[1] == pytest.approx(expected, rel=1e-6)
-    wide = 1 - math.exp(-rho * 0.1 / 0.6 / k)
-    assert wide < 0.4  # a 6 m radius arc feels about a third of the pivot's bore torque
