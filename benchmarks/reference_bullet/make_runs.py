@@ -41,7 +41,7 @@ from swarm.robot.patterns import spiral, square, square_spiral_line, straight  #
 
 #: Effective track the patterns steer with: the Husky's pivots turn ~1/4 of what its geometric
 #: track predicts on concrete, its car turns about 1/2 (measured once in this engine).
-PATTERN_TRACK_M = 2.6
+PATTERN_TRACK_M = 1.4
 #: Pattern name -> (commands, initial heading in degrees), as the sample runs start.
 PATTERNS = {
     "straight": (lambda: straight(wheel_radius_m=WHEEL_RADIUS, dt_s=1 / RATE_HZ), 136.0),
