@@ -305,7 +305,7 @@ def _cmd_validate(args: argparse.Namespace) -> int:
 def _cmd_calibrate(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
-    from swarm.robot.calibrate import MODEL_BOUNDS, calibrate, write_calibration
+    from swarm.robot.calibrate import COM_PARAMS, MODEL_BOUNDS, calibrate, write_calibration
     from swarm.robot.params import load_robot
 
     _check_output(args.out, "--out", (".yaml", ".yml"))
@@ -321,13 +321,11 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
     free = None
     if args.free:
         free = [f.strip() for f in args.free.split(",") if f.strip()]
+        allowed = [*MODEL_BOUNDS[args.model], *(COM_PARAMS if args.model == "skid" else ())]
         for f in free:
-            if f not in MODEL_BOUNDS[args.model]:
+            if f not in allowed:
                 raise InputError(
-                    "command line",
-                    "--free",
-                    f,
-                    f"parameters of the {args.model} model: {', '.join(MODEL_BOUNDS[args.model])}",
+                    "command line", "--free", f, f"parameters of the {args.model} model: {', '.join(allowed)}"
                 )
     if args.max_evaluations < 1:
         raise InputError("command line", "--max-evaluations", args.max_evaluations, "a positive integer")
@@ -356,6 +354,10 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
                     "out": str(args.out),
                     "parameters": result.parameters,
                     "std_errors": result.std_errors,
+                    "priors": result.priors,
+                    "resolution": result.resolution,
+                    "held_by_prior": result.held_by_prior,
+                    "warnings": result.warnings,
                     "before": [s.as_dict() for s in result.before],
                     "after": [s.as_dict() for s in result.after],
                 },
@@ -363,9 +365,14 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
             )
         )
         return 0
-    rows = [["parameter", "fitted", "std error"]]
-    rows += [[k, f"{v:.4g}", f"{result.std_errors[k]:.2g}"] for k, v in result.parameters.items()]
+    rows = [["parameter", "fitted", "std error", "prior", "set by"]]
+    for k, v in result.parameters.items():
+        prior, sigma = result.priors.get(k, (float("nan"), float("nan")))
+        by = "prior (runs say little)" if k in result.held_by_prior else "the runs"
+        rows.append([k, f"{v:.4g}", f"{result.std_errors[k]:.2g}", f"{prior:.3g} +- {sigma:.2g}", by])
     print(_table(rows))
+    for line in result.warnings:
+        print(f"warning: {line}", file=sys.stderr)
     print()
     before, after = _score_rows(result.before), _score_rows(result.after)
     rows = [before[0]] + [[f"{r[0]} (start)", *r[1:]] for r in before[1:]]

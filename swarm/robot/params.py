@@ -50,6 +50,8 @@ class RobotParams:
     com_y_m: float = 0.0
     com_height_m: float | None = None
     measured_yaw_inertia_kgm2: float | None = None
+    #: the robot file gave the centre of mass (else calibration may fit it)
+    com_stated: bool = False
 
     @property
     def body_mass_kg(self) -> float:
@@ -187,7 +189,7 @@ def robot_from_dict(data: object, source: str | Path = "<robot>") -> RobotParams
     """Validate a mapping of robot keys (as in robot.yaml) and build `RobotParams`."""
     if not isinstance(data, dict):
         raise InputError(source, "(top level)", type(data).__name__, "a mapping of robot keys")
-    known = {f.name for f in fields(RobotParams)}
+    known = {f.name for f in fields(RobotParams)} - {"com_stated"}
     for key in data:
         if key not in known:
             raise InputError(source, str(key), key, f"one of {sorted(known)}")
@@ -219,6 +221,7 @@ def robot_from_dict(data: object, source: str | Path = "<robot>") -> RobotParams
                     source, key, value, f"a number within +-{half:g} m (half the {span}: over the wheels)"
                 )
             values[key] = float(value)
+    values["com_stated"] = "com_x_m" in data or "com_y_m" in data
     if values.get("n_wheels", 4) not in (2, 4):
         raise InputError(source, "n_wheels", values["n_wheels"], "2 or 4")
     if values["wheel_mass_kg"] * values.get("n_wheels", 4) >= values["mass_kg"]:  # type: ignore[operator]

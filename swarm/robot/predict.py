@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Literal
 
 import numpy as np
@@ -37,6 +37,13 @@ class Trajectory:
             np.interp(t_s, self.t_s, self.y_m),
             np.interp(t_s, self.t_s, self.heading_rad),
         )
+
+
+def robot_for(robot: RobotParams, mode: TerrainMode) -> RobotParams:
+    """The robot with what a skid fit on `mode` found about it (a centre of mass the robot file
+    did not state); the robot itself otherwise."""
+    fitted = mode.model_params.get("skid", {})
+    return replace(robot, **fitted) if fitted and not robot.com_stated else robot
 
 
 def predict(
@@ -80,7 +87,7 @@ def _skid(
     adaptive: bool,
     dt_s: float,
 ) -> Trajectory:
-    sim = SkidModel(robot)
+    sim = SkidModel(robot_for(robot, mode))
     state0 = sim.state_at_rest(np.array([pose0]))
     coeffs = coeffs_for(mode)
     if adaptive:

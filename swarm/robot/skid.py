@@ -48,6 +48,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
+from functools import cached_property
 from typing import NamedTuple
 
 import numpy as np
@@ -119,10 +120,17 @@ class SkidModel:
     robot: RobotParams
     regularization_mps: float = REGULARIZATION_SPEED_MPS
 
-    @property
+    @cached_property
     def centred(self) -> bool:
         """Centre of mass over the wheel centre: all four contacts carry the same static load."""
         return self.robot.com_x_m == 0.0 and self.robot.com_y_m == 0.0
+
+    @cached_property
+    def _arms(self) -> tuple[float, float, float, float]:
+        """Contact arms from the centre of mass: y of the left and right sides, x of the front
+        and rear axles (looked up once: the swarm steps call this thousands of times)."""
+        (y_left, y_right), (x_front, x_rear) = self.robot.contact_y_m, self.robot.contact_x_m
+        return y_left, y_right, x_front, x_rear
 
     @property
     def contact_x_m(self) -> np.ndarray:
@@ -163,7 +171,7 @@ class SkidModel:
         )
 
     def _contacts(self, state: np.ndarray, omega: np.ndarray, g: _Ground) -> _Contacts:
-        (y_left, y_right), (x_front, x_rear) = self.robot.contact_y_m, self.robot.contact_x_m
+        y_left, y_right, x_front, x_rear = self._arms
         reg = self.regularization_mps
         u, v, r = state[:, U], state[:, V], state[:, R]
         # (side, n) and (axle, n), filled in place: np.stack costs more than the arithmetic here
@@ -246,7 +254,7 @@ class SkidModel:
         g = self._ground(c, load_scale, ground_accel_mps2)
         k = self._contacts(state, omega, g)
         lin, yaw = self._damping(state, g)
-        (y_left, y_right), (x_front, x_rear) = self.robot.contact_y_m, self.robot.contact_x_m
+        y_left, y_right, x_front, x_rear = self._arms
         m, inertia = self.robot.mass_kg, self.robot.yaw_inertia_kgm2
         u, v, r, th = state[:, U], state[:, V], state[:, R], state[:, HEADING]
         fx_side = -k.kx_side * (k.vx - k.w) - k.k_roll * k.vx  # (2, n) left, right
@@ -305,7 +313,7 @@ class SkidModel:
         g = self._ground(c, load_scale, ground_accel_mps2)
         k = self._contacts(state, omega, g)
         lin, yaw = self._damping(state, g)
-        (y_left, y_right), (x_front, x_rear) = self.robot.contact_y_m, self.robot.contact_x_m
+        y_left, y_right, x_front, x_rear = self._arms
         m, inertia = self.robot.mass_kg, self.robot.yaw_inertia_kgm2
         u, v, r = state[:, U], state[:, V], state[:, R]
         kx = k.kx_side + k.k_roll  # (2, n) per side, slip and rolling together
