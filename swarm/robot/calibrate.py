@@ -89,6 +89,9 @@ COM_SIGMA_FRACTION = 0.25
 #: Resolution below which a parameter counts as set by its prior rather than by the data.
 HELD_BY_PRIOR_BELOW = 0.5
 
+#: Opening fractions of the runs a skid fit is grown through before it takes the whole runs.
+HORIZONS = (0.25, 0.5)
+
 #: Weight of the prior: a one-sigma departure costs as much as this RMS path error (m).
 PRIOR_M = 0.01
 #: Most reference samples a run contributes to the residuals (evenly spaced).
@@ -152,10 +155,22 @@ class _Problem:
         self.upper = np.array([bounds[n][1] for n in names])
         self.start = np.clip([self._start_value(n) for n in names], self.lower, self.upper)
         self.sigma = np.array([self._prior_sigma(n, v) for n, v in zip(names, self.start, strict=True)])
+        self.prior_m = prior_m
+        self.all_samples = self.samples
+        self.set_horizon(1.0)
+
+    def set_horizon(self, fraction: float) -> None:
+        """Fit only the first `fraction` of every run (simulated and scored), or all of it."""
+        self.horizon = fraction
+        self.samples = [
+            idx[r.truth.t_s[idx] <= fraction * r.wheels.duration_s + 1e-9]
+            for r, idx in zip(self.runs, self.all_samples, strict=True)
+        ]
         n_samples = sum(len(s) for s in self.samples)
         # residual rows of 3 n_samples; a one-sigma departure adds prior_m^2 to their mean square
-        self.prior_scale = prior_m * np.sqrt(3 * n_samples) / self.sigma
+        self.prior_scale = self.prior_m * np.sqrt(3 * n_samples) / self.sigma
         self.n_data = 3 * n_samples
+        self._last = None
 
     def _start_value(self, name: str) -> float:
         if self.model == "skid":
@@ -221,7 +236,8 @@ class _Problem:
         return np.concatenate([data, prior], axis=1)
 
     def _skid_batch(self, run: Run, ps: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        return predicted_poses(run, self.robot, [self.mode_for(p) for p in ps], self.dt_s)
+        modes = [self.mode_for(p) for p in ps]
+        return predicted_poses(run, self.robot, modes, self.dt_s, self.horizon * run.wheels.duration_s)
 
     def _thesis_batch(self, run: Run, ps: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         fn = kinematic if self.model == "kinematic" else lagrangian
@@ -252,7 +268,7 @@ class _Problem:
 
 
 def predicted_poses(
-    run: Run, robot: RobotParams, modes: Sequence[TerrainMode], dt_s: float
+    run: Run, robot: RobotParams, modes: Sequence[TerrainMode], dt_s: float, t_end_s: float | None = None
 ) -> tuple[np.ndarray, np.ndarray]:
     """The skid model's poses over `run` on each of `modes` at once, one robot per mode.
 
@@ -273,7 +289,7 @@ def predicted_poses(
             state0,
             lambda a, b, k=k: np.broadcast_to(run.wheels.mean_speeds(a, b), (k, 2)),
             coeffs_for([modes[i] for i in members]),
-            run.wheels.duration_s,
+            run.wheels.duration_s if t_end_s is None else t_end_s,
             dt_s,
         )
         if poses.size == 0:
@@ -337,9 +353,28 @@ def calibrate(
         raise ValueError(f"cannot fit {unknown} for the {model} model; choose from {allowed}")
     problem = _Problem(runs, robot, model, base, names, dt_s, progress, prior_m)
     before = [validate(run, robot, base, model, adaptive=False, dt_s=dt_s)[0] for run in runs]
+    x0 = problem.start
+    if model == "skid":
+        # a growing horizon: fitted first on the opening of each run (a turn or two, where the
+        # error is still small and the least squares nearly convex), then on more, then on all.
+        # From the terrain defaults straight to the whole run, a robot that turns 2.4 times less
+        # than the defaults (the Bullet Husky) landed at mu 1.85 and 23% RMSE on its own square.
+        for fraction in HORIZONS:
+            problem.set_horizon(fraction)
+            x0 = least_squares(
+                problem.fun,
+                x0,
+                jac=problem.jac,
+                bounds=(problem.lower, problem.upper),
+                x_scale="jac",
+                max_nfev=max(4, max_evaluations // 4),
+                xtol=1e-4,
+                ftol=1e-4,
+            ).x
+        problem.set_horizon(1.0)
     fit = least_squares(
         problem.fun,
-        problem.start,
+        x0,
         jac=problem.jac,
         bounds=(problem.lower, problem.upper),
         x_scale="jac",
