@@ -53,7 +53,12 @@ def _parser() -> argparse.ArgumentParser:
         "--fixed-step",
         type=float,
         metavar="DT_S",
-        help="skid model: fixed step (s) instead of the adaptive integrator",
+        help="skid model: integration step (s); default 0.005, the step calibration uses",
+    )
+    validate.add_argument(
+        "--adaptive",
+        action="store_true",
+        help="skid model: adaptive LSODA, its step bounded by --fixed-step, instead of fixed steps",
     )
     validate.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
     validate.add_argument(
@@ -262,7 +267,9 @@ def _cmd_validate(args: argparse.Namespace) -> int:
     models = [args.model] + (
         [m for m in ("skid", "kinematic", "lagrangian") if m != args.model] if args.compare else []
     )
-    opts = {} if args.fixed_step is None else {"adaptive": False, "dt_s": args.fixed_step}
+    if args.fixed_step is not None and not 0 < args.fixed_step <= 0.1:
+        raise InputError("command line", "--fixed-step", args.fixed_step, "a step in (0, 0.1] seconds")
+    opts = {"adaptive": args.adaptive, **({} if args.fixed_step is None else {"dt_s": args.fixed_step})}
     results = {m: validate(run, robot, mode, m, **(opts if m == "skid" else {})) for m in models}
     scores = {m: r[0] for m, r in results.items()}
     if args.plot is not None:
@@ -311,7 +318,7 @@ def _cmd_validate(args: argparse.Namespace) -> int:
 def _cmd_calibrate(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
-    from swarm.robot.calibrate import MODEL_BOUNDS, calibrate, write_calibration
+    from swarm.robot.calibrate import COM_PARAMS, MODEL_BOUNDS, calibrate, write_calibration
     from swarm.robot.params import load_robot
 
     _check_output(args.out, "--out", (".yaml", ".yml"))
@@ -327,13 +334,11 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
     free = None
     if args.free:
         free = [f.strip() for f in args.free.split(",") if f.strip()]
+        allowed = [*MODEL_BOUNDS[args.model], *(COM_PARAMS if args.model == "skid" else ())]
         for f in free:
-            if f not in MODEL_BOUNDS[args.model]:
+            if f not in allowed:
                 raise InputError(
-                    "command line",
-                    "--free",
-                    f,
-                    f"parameters of the {args.model} model: {', '.join(MODEL_BOUNDS[args.model])}",
+                    "command line", "--free", f, f"parameters of the {args.model} model: {', '.join(allowed)}"
                 )
     if args.max_evaluations < 1:
         raise InputError("command line", "--max-evaluations", args.max_evaluations, "a positive integer")
@@ -362,6 +367,10 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
                     "out": str(args.out),
                     "parameters": result.parameters,
                     "std_errors": result.std_errors,
+                    "priors": result.priors,
+                    "resolution": result.resolution,
+                    "held_by_prior": result.held_by_prior,
+                    "warnings": result.warnings,
                     "before": [s.as_dict() for s in result.before],
                     "after": [s.as_dict() for s in result.after],
                 },
@@ -369,9 +378,14 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
             )
         )
         return 0
-    rows = [["parameter", "fitted", "std error"]]
-    rows += [[k, f"{v:.4g}", f"{result.std_errors[k]:.2g}"] for k, v in result.parameters.items()]
+    rows = [["parameter", "fitted", "std error", "prior", "set by"]]
+    for k, v in result.parameters.items():
+        prior, sigma = result.priors.get(k, (float("nan"), float("nan")))
+        by = "prior (runs say little)" if k in result.held_by_prior else "the runs"
+        rows.append([k, f"{v:.4g}", f"{result.std_errors[k]:.2g}", f"{prior:.3g} +- {sigma:.2g}", by])
     print(_table(rows))
+    for line in result.warnings:
+        print(f"warning: {line}", file=sys.stderr)
     print()
     before, after = _score_rows(result.before), _score_rows(result.after)
     rows = [before[0]] + [[f"{r[0]} (start)", *r[1:]] for r in before[1:]]

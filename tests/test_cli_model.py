@@ -168,6 +168,25 @@ def _negative_mass(tmp_path: Path) -> tuple[list[object], list[str]]:
     return args, [str(robot), "mass_kg"]
 
 
+def _centre_of_mass_off_the_wheels(tmp_path: Path) -> tuple[list[object], list[str]]:
+    data = yaml.safe_load(ROBOT.read_text()) | {"com_x_m": -0.2}
+    robot = tmp_path / "robot.yaml"
+    robot.write_text(yaml.safe_dump(data))
+    args = [
+        "--robot",
+        robot,
+        "--encoders",
+        encoders("concrete_straight"),
+        "--truth",
+        truth("concrete_straight"),
+    ]
+    return args, [str(robot), "com_x_m", "within +-0.15 m"]
+
+
+def _zero_fixed_step(tmp_path: Path) -> tuple[list[object], list[str]]:
+    return [*run_args("concrete_straight"), "--fixed-step", "0"], ["--fixed-step", "(0, 0.1]"]
+
+
 def _encoders_without_truth(tmp_path: Path) -> tuple[list[object], list[str]]:
     return ["--robot", ROBOT, "--encoders", encoders("concrete_straight")], ["--truth"]
 
@@ -204,6 +223,8 @@ def _mismatched_runs(tmp_path: Path) -> tuple[list[object], list[str]]:
         _missing_encoders,
         _malformed_encoder_line,
         _negative_mass,
+        _centre_of_mass_off_the_wheels,
+        _zero_fixed_step,
         _encoders_without_truth,
         _unknown_mode,
         _bad_terrain_value,

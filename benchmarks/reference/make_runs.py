@@ -25,34 +25,8 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+from run_files import RATE_HZ, write_run
 from skid4_mujoco import REPO, load_robot, load_surfaces, simulate
-
-RATE_HZ = 100
-ENCODER_DT_MS = (25, 28)  # inclusive range of the sample logs' intervals (mean 26.5 ms, ~38 Hz)
-
-
-def _wrap(a: np.ndarray) -> np.ndarray:
-    return np.angle(np.exp(1j * a))
-
-
-def encoder_log(
-    t_s: np.ndarray, left_rad: np.ndarray, right_rad: np.ndarray, ticks_per_rev: int, seed: int
-) -> np.ndarray:
-    """Rows (time_ms, left_ticks, right_ticks) at jittered ~38 Hz, ticks floored from wheel angle."""
-    rng = np.random.default_rng(seed)
-    end_ms = round(1000 * (t_s[-1] - t_s[0]))
-    times = [0]
-    while True:
-        nxt = times[-1] + int(rng.integers(ENCODER_DT_MS[0], ENCODER_DT_MS[1] + 1))
-        if nxt > end_ms:
-            break
-        times.append(nxt)
-    tm = np.asarray(times)
-    ts = t_s[0] + tm / 1000.0
-    k = ticks_per_rev / (2 * math.pi)
-    left = np.floor(np.interp(ts, t_s, left_rad) * k + 1e-9).astype(int)
-    right = np.floor(np.interp(ts, t_s, right_rad) * k + 1e-9).astype(int)
-    return np.column_stack([tm, left, right])
 
 
 def make_run(
@@ -76,24 +50,13 @@ def make_run(
     left = np.interp(t, t_s - t_s[0], left_radps)
     right = np.interp(t, t_s - t_s[0], right_radps)
     sim = simulate(t, left, right, surface, heading0_rad, seed=seed)
-    heading = _wrap(sim["heading_rad"])
-
-    out_dir = Path(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
-    stem = out_dir / f"{surface}_{pattern}"
-    paths = {
-        "ssv": stem.with_name(stem.name + ".ssv"),
-        "truth": stem.with_name(stem.name + "_truth.txt"),
-        "encoders": stem.with_name(stem.name + "_encoders.txt"),
-    }
-    ssv = np.column_stack([t, sim["left_radps"], sim["right_radps"], heading, sim["x_m"], sim["y_m"]])
-    np.savetxt(paths["ssv"], ssv, fmt="%.5f", delimiter=" ")
-    truth = np.column_stack([t, sim["x_m"], sim["y_m"], heading])
-    np.savetxt(paths["truth"], truth, fmt="%.4f", delimiter=" ")
-    ticks = int(load_robot()["encoder_ticks_per_wheel_rev"])
-    enc = encoder_log(t, sim["left_rad"], sim["right_rad"], ticks, seed)
-    np.savetxt(paths["encoders"], enc, fmt="%d", delimiter="\t")
-    return paths
+    return write_run(
+        Path(out_dir) / f"{surface}_{pattern}",
+        t,
+        sim,
+        int(load_robot()["encoder_ticks_per_wheel_rev"]),
+        seed,
+    )
 
 
 def square_spiral_line() -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -1,10 +1,18 @@
-"""Robot parameters from YAML, and inertia from geometry as the thesis computes it (ch. 2.2)."""
+"""Robot parameters from YAML, inertia from geometry as the thesis computes it (ch. 2.2), and how
+the weight shares between the wheels.
+
+[Wong08] J. Y. Wong, Theory of Ground Vehicles, 4th ed., Wiley, 2008, sec. 3.1 (normal loads on
+the axles, longitudinal load transfer). [Gillespie92] T. D. Gillespie, Fundamentals of Vehicle
+Dynamics, SAE, 1992, ch. 2 (axle loads under acceleration) and ch. 6 (lateral load transfer).
+"""
 
 from __future__ import annotations
 
 from dataclasses import dataclass, fields
 from functools import cached_property
 from pathlib import Path
+
+import numpy as np
 
 from swarm.errors import InputError
 from swarm.files import read_yaml
@@ -19,6 +27,12 @@ class RobotParams:
     `track_width_m` is the thesis's axle length d (left-right wheel-centre distance);
     `wheelbase_m` is the front-rear axle distance, which sets where the four contacts are.
     `length_m`, `width_m`, `height_m` are the box body a, b, c of eq. 2.13.
+
+    The centre of mass sits `com_x_m` ahead of and `com_y_m` left of the wheel centre (the middle
+    of the four wheel contacts, where poses are measured), `com_height_m` above the ground (default
+    the axle height, `wheel_radius_m`). It sets how the weight shares between the wheels and how
+    acceleration moves it (`wheel_loads`). `measured_yaw_inertia_kgm2`, when known (a swing test,
+    a CAD model), replaces the box-and-cylinders estimate.
     """
 
     name: str
@@ -32,6 +46,12 @@ class RobotParams:
     height_m: float
     encoder_ticks_per_wheel_rev: int = 1960
     n_wheels: int = 4
+    com_x_m: float = 0.0
+    com_y_m: float = 0.0
+    com_height_m: float | None = None
+    measured_yaw_inertia_kgm2: float | None = None
+    #: the robot file gave the centre of mass (else calibration may fit it)
+    com_stated: bool = False
 
     @property
     def body_mass_kg(self) -> float:
@@ -59,14 +79,83 @@ class RobotParams:
 
     @cached_property
     def yaw_inertia_kgm2(self) -> float:
-        """Yaw inertia for the `skid` model: the body without wheels as a box, plus each wheel by
-        the parallel-axis theorem, so no mass is counted twice (the thesis boxes the whole mass)."""
+        """Yaw inertia about the centre of mass for the `skid` model: the measured one if given,
+        else the body without wheels as a box plus each wheel by the parallel-axis theorem, so no
+        mass is counted twice (the thesis boxes the whole mass)."""
+        if self.measured_yaw_inertia_kgm2 is not None:
+            return self.measured_yaw_inertia_kgm2
         body = box_yaw_inertia(self.body_mass_kg, self.length_m, self.width_m)
         return body + self.n_wheels * self.wheel_inertia_about_robot_kgm2
 
     @property
+    def com_height_or_axle_m(self) -> float:
+        return self.wheel_radius_m if self.com_height_m is None else self.com_height_m
+
+    @property
+    def contact_x_m(self) -> tuple[float, float]:
+        """Body x of the front and rear axles' contacts, measured from the centre of mass."""
+        half = self.wheelbase_m / 2
+        return half - self.com_x_m, -half - self.com_x_m
+
+    @property
+    def contact_y_m(self) -> tuple[float, float]:
+        """Body y of the left and right sides' contacts, measured from the centre of mass."""
+        half = self.track_width_m / 2
+        return half - self.com_y_m, -half - self.com_y_m
+
+    @property
+    def static_load_shares(self) -> tuple[tuple[float, float], tuple[float, float]]:
+        """Shares of the weight on (front, rear) axles and (left, right) sides at rest.
+
+        Lever rule about the centre of mass: N_f (l/2 - x_c) = N_r (l/2 + x_c), likewise across
+        the track [Wong08, sec. 3.1]. The four-contact problem is statically indeterminate; with
+        a rigid chassis on equally stiff contacts each wheel's load is the product of its axle's
+        and its side's share, which balances both moments.
+        """
+        half_l, half_t = self.wheelbase_m / 2, self.track_width_m / 2
+        front = (half_l + self.com_x_m) / self.wheelbase_m
+        left = (half_t + self.com_y_m) / self.track_width_m
+        return (front, 1.0 - front), (left, 1.0 - left)
+
+    @property
     def weight_n(self) -> float:
         return self.mass_kg * GRAVITY_MPS2
+
+
+def wheel_loads(
+    robot: RobotParams,
+    support_n: np.ndarray,
+    ground_accel_mps2: np.ndarray | None = None,
+) -> np.ndarray:
+    """Normal load on each contact, shape (2 sides [left, right], 2 axles [front, rear], n).
+
+    `support_n` (n,) is the weight the ground carries (m g cos(slope), less buoyancy or wave
+    lift). `ground_accel_mps2` (n, 2) is the in-plane force the ground exerts per unit mass, in
+    the body frame: the centre of mass's acceleration minus gravity's in-plane part (on a slope)
+    and any other external force per mass. That force acts at the ground, h below the centre of
+    mass, and its pitch and roll moments shift load between the axles and the sides: accelerating
+    at a_x unloads the front axle by m a_x h / l and loads the rear as much, a_y (to the left)
+    moves m a_y h / t to the right side [Wong08, sec. 3.1; Gillespie92, ch. 2 and 6]. No load goes
+    negative: a wheel that lifts off carries nothing.
+    """
+    (front, rear), (left, right) = robot.static_load_shares
+    support = np.reshape(support_n, -1)
+    loads = np.empty((2, 2, support.shape[0]))
+    loads[0, 0] = support * (left * front)
+    loads[0, 1] = support * (left * rear)
+    loads[1, 0] = support * (right * front)
+    loads[1, 1] = support * (right * rear)
+    if ground_accel_mps2 is None:
+        return loads
+    acc = np.reshape(ground_accel_mps2, (-1, 2))
+    mh = robot.mass_kg * robot.com_height_or_axle_m
+    to_rear = mh * acc[:, 0] / robot.wheelbase_m  # total moved from the front axle to the rear
+    to_right = mh * acc[:, 1] / robot.track_width_m  # total moved from the left side to the right
+    loads[:, 0] -= to_rear * np.array([[left], [right]])
+    loads[:, 1] += to_rear * np.array([[left], [right]])
+    loads[0] -= to_right * np.array([[front], [rear]])
+    loads[1] += to_right * np.array([[front], [rear]])
+    return np.maximum(loads, 0.0, out=loads)
 
 
 def box_yaw_inertia(mass_kg: float, length_m: float, width_m: float) -> float:
@@ -100,7 +189,7 @@ def robot_from_dict(data: object, source: str | Path = "<robot>") -> RobotParams
     """Validate a mapping of robot keys (as in robot.yaml) and build `RobotParams`."""
     if not isinstance(data, dict):
         raise InputError(source, "(top level)", type(data).__name__, "a mapping of robot keys")
-    known = {f.name for f in fields(RobotParams)}
+    known = {f.name for f in fields(RobotParams)} - {"com_stated"}
     for key in data:
         if key not in known:
             raise InputError(source, str(key), key, f"one of {sorted(known)}")
@@ -118,6 +207,21 @@ def robot_from_dict(data: object, source: str | Path = "<robot>") -> RobotParams
             if isinstance(value, bool) or not isinstance(value, int) or value <= 0:
                 raise InputError(source, key, value, "a positive integer")
             values[key] = value
+    for key in ("com_height_m", "measured_yaw_inertia_kgm2"):
+        if key in data:
+            value = data[key]
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or not value > 0:
+                raise InputError(source, key, value, "a positive number")
+            values[key] = float(value)
+    for key, span in (("com_x_m", "wheelbase_m"), ("com_y_m", "track_width_m")):
+        if key in data:
+            value, half = data[key], values[span] / 2  # type: ignore[operator]
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or not abs(value) < half:
+                raise InputError(
+                    source, key, value, f"a number within +-{half:g} m (half the {span}: over the wheels)"
+                )
+            values[key] = float(value)
+    values["com_stated"] = "com_x_m" in data or "com_y_m" in data
     if values.get("n_wheels", 4) not in (2, 4):
         raise InputError(source, "n_wheels", values["n_wheels"], "2 or 4")
     if values["wheel_mass_kg"] * values.get("n_wheels", 4) >= values["mass_kg"]:  # type: ignore[operator]

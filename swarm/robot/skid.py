@@ -3,20 +3,40 @@
 State per robot `(x, y, heading, u, v, r)` (world pose; body-frame velocities and yaw rate), input
 the left and right wheel angular velocities (velocity-controlled motors, as the encoders measure).
 
-Each of the four wheel contacts (two per side, at +-wheelbase/2 and +-track/2) slips relative to
-the ground. Its slip velocity is the contact-point velocity minus the wheel's surface speed, plus a
-third component rho * r for the patch spinning with the body (rho = turning_resistance_m /
-mu_lateral, an effective patch radius); the combined slip is that vector over the contact's
-rolling speed (the longitudinal slip ratio, the tangent of the slip angle, and the turn slip).
-Friction follows Janosi-Hanamoto, mu N (1 - exp(-s / k)), shared along the slip direction as a
-friction ellipsoid: `mu_peak` forward, `mu_lateral` sideways, and a spin (bore) moment of up to
-turning_resistance_m * N per patch, so a patch that slides sideways has less left to resist
-spinning, as in tyre turn-slip models and MuJoCo's elliptic friction cones. Rolling resistance
-c_rr N opposes each contact's rolling. The lateral forces at the front and rear contacts and the
-patches' spin friction together resist turning (`turning_resistance_moment` gives the former:
-mu W l / 2 at full sliding for point contacts). Water carries part of the weight
-(`buoyancy_fraction`) and drags the hull quadratically. An external body-frame wrench
-(Fx, Fy, Mz) and a normal-load scale per robot bring in slopes, jet thrust, currents and waves.
+Each of the four wheel contacts (two per side, at +-wheelbase/2 and +-track/2 from the wheel
+centre; the state's origin is the centre of mass, `RobotParams.com_x_m`/`com_y_m` from it) slips
+relative to the ground. Its slip velocity is the contact-point velocity minus the wheel's surface
+speed, plus a third component rho * r for the patch spinning with the body (rho =
+turning_resistance_m / mu_lateral, an effective patch radius); the combined slip is that vector
+over the contact's rolling speed: the longitudinal slip ratio, the tangent of the slip angle, and
+the patch's turn slip rho r / V (Pacejka, Tyre and Vehicle Dynamics, 3rd ed., 2012, sec. 4.3:
+phi = r / V). Friction follows Janosi-Hanamoto, mu N (1 - exp(-s / k)), shared along the slip
+direction as a friction ellipsoid: `mu_peak` forward, `mu_lateral` sideways, and a spin (bore)
+moment of up to turning_resistance_m * N per patch (the Howe & Cutkosky 1996 ellipsoidal limit
+surface of a sliding patch), so a patch that slides sideways has less left to resist spinning.
+N is each contact's own load (`params.wheel_loads`: centre of mass, load transfer).
+
+How turning depends on radius and load comes out of this, as in Wong & Chiang's theory of skid
+steering ("A general theory for skid steering of tracked vehicles on firm ground", Proc. IMechE
+D 215, 2001): k = K / l is the patch's shear displacement modulus over its length, so in a wide
+arc (small lateral slip and turn slip) the lateral and spin resistances are a fraction of mu N
+and rise toward it as the turn tightens to a pivot, the dependence Steeds' empirical
+mu_t = mu_max / (0.925 + 0.15 R / B) summarises [Wong08, ch. 7]; each contact resists in
+proportion to its load. The ICR spread Mandow et al. (IROS 2007) fit as one constant per terrain
+thus varies with the motion, as Rabiee & Biswas (ICRA 2019) found it does.
+
+(Tried for issue 14 and not kept: a bore torque on its own budget, added to the lateral forces'
+moment as the classical moment balance adds its turning-resistance moment. It matched MuJoCo's
+torsional friction better on hard ground, but calibrated on a square it predicted MuJoCo's soft-
+sand square-spiral-line with 6.1% path RMSE against the shared ellipsoid's 1.9%.)
+
+Rolling resistance c_rr N opposes each contact's rolling. Water carries part of the weight
+(`buoyancy_fraction`) and drags the hull quadratically. An external body-frame wrench (Fx, Fy,
+Mz) and a normal-load scale per robot bring in slopes, jet thrust, currents and waves.
+`turning_resistance_moment` gives the lateral forces' yaw moment (mu W l / 2 at full sliding for
+point contacts).
+
+[Wong08] J. Y. Wong, Theory of Ground Vehicles, 4th ed., Wiley, 2008.
 
 Two integrators: `step` advances n robots by one fixed step with a linearly implicit scheme
 (contact and drag forces frozen at their secant slope, then the 3x3 velocity system solved in
@@ -28,12 +48,13 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
+from functools import cached_property
 from typing import NamedTuple
 
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from swarm.robot.params import GRAVITY_MPS2, RobotParams
+from swarm.robot.params import GRAVITY_MPS2, RobotParams, wheel_loads
 from swarm.robot.terrain import COEFFICIENTS, TerrainMode
 
 Coeffs = Mapping[str, np.ndarray | float]
@@ -53,12 +74,15 @@ def coeffs_for(modes: TerrainMode | list[TerrainMode]) -> dict[str, np.ndarray]:
 class _Ground(NamedTuple):
     """Per-robot ground terms (n,), derived once per call from the coefficients."""
 
-    load_n: np.ndarray  # normal load per contact
+    load_n: np.ndarray  # normal load per contact: (n,) when all four share it, else (side, axle, n)
     surface_m: np.ndarray  # effective rolling radius
     mu_peak: np.ndarray
     mu_lateral: np.ndarray
     shear_slip: np.ndarray
-    roll_n: np.ndarray  # rolling-resistance force per contact, c_rr N
+    roll_n: (
+        np.ndarray
+    )  # rolling-resistance force of each side's two contacts together, c_rr N, (n,) or (2, n)
+    c_rr: np.ndarray
     spin_m: np.ndarray  # patch spin radius: turning_resistance_m / mu_lateral
     drag: np.ndarray  # 0.5 rho Cd A
 
@@ -78,7 +102,7 @@ class _Contacts(NamedTuple):
     secant: np.ndarray  # (side, axle, n): slip-force slope per unit mu of each contact
     kx_side: np.ndarray  # sum over the side's two contacts of the slip slope along x
     ky_axle: np.ndarray  # sum over the axle's two contacts of the slip slope along y
-    k_roll: np.ndarray  # per contact on each side
+    k_roll: np.ndarray  # rolling-resistance slope of each side's two contacts together
     k_spin: np.ndarray  # (n,) yaw-moment slope of the four patches' spin friction
 
 
@@ -96,52 +120,67 @@ class SkidModel:
     robot: RobotParams
     regularization_mps: float = REGULARIZATION_SPEED_MPS
 
-    @property
-    def half_track_m(self) -> float:
-        return self.robot.track_width_m / 2
+    @cached_property
+    def centred(self) -> bool:
+        """Centre of mass over the wheel centre: all four contacts carry the same static load."""
+        return self.robot.com_x_m == 0.0 and self.robot.com_y_m == 0.0
 
-    @property
-    def half_base_m(self) -> float:
-        return self.robot.wheelbase_m / 2
+    @cached_property
+    def _arms(self) -> tuple[float, float, float, float]:
+        """Contact arms from the centre of mass: y of the left and right sides, x of the front
+        and rear axles (looked up once: the swarm steps call this thousands of times)."""
+        (y_left, y_right), (x_front, x_rear) = self.robot.contact_y_m, self.robot.contact_x_m
+        return y_left, y_right, x_front, x_rear
 
     @property
     def contact_x_m(self) -> np.ndarray:
-        """Body x of the contacts: front-left, rear-left, front-right, rear-right."""
-        b = self.half_base_m
-        return np.array([b, -b, b, -b])
+        """Body x of the contacts from the centre of mass: front-left, rear-left, front-right, rear-right."""
+        f, r = self.robot.contact_x_m
+        return np.array([f, r, f, r])
 
     @property
     def contact_y_m(self) -> np.ndarray:
-        a = self.half_track_m
-        return np.array([a, a, -a, -a])
+        left, right = self.robot.contact_y_m
+        return np.array([left, left, right, right])
 
-    def _ground(self, c: Coeffs, load_scale: np.ndarray | None) -> _Ground:
+    def _ground(
+        self, c: Coeffs, load_scale: np.ndarray | None, ground_accel: np.ndarray | None = None
+    ) -> _Ground:
         support = 1.0 - _flat(c, "buoyancy_fraction")
         if load_scale is not None:
             support = support * np.reshape(load_scale, -1)
-        load = (self.robot.mass_kg * GRAVITY_MPS2 / 4.0) * support
+        c_rr = _flat(c, "rolling_resistance")
+        if self.centred and ground_accel is None:
+            load = (self.robot.mass_kg * GRAVITY_MPS2 / 4.0) * support  # the swarm's fast path
+            roll = 2.0 * c_rr * load
+        else:
+            n_accel = 0 if ground_accel is None else np.reshape(ground_accel, (-1, 2)).shape[0]
+            support = np.broadcast_to(support, (max(c_rr.shape[0], support.shape[0], n_accel),))
+            load = wheel_loads(self.robot, self.robot.mass_kg * GRAVITY_MPS2 * support, ground_accel)
+            roll = c_rr * (load[:, 0] + load[:, 1])
         return _Ground(
             load_n=load,
             surface_m=self.robot.wheel_radius_m * _flat(c, "rolling_radius_scale"),
             mu_peak=_flat(c, "mu_peak"),
             mu_lateral=_flat(c, "mu_lateral"),
             shear_slip=_flat(c, "shear_slip"),
-            roll_n=_flat(c, "rolling_resistance") * load,
+            roll_n=roll,
+            c_rr=c_rr,
             spin_m=_flat(c, "turning_resistance_m") / np.maximum(_flat(c, "mu_lateral"), 1e-9),
             drag=_flat(c, "drag_n_s2_per_m2"),
         )
 
     def _contacts(self, state: np.ndarray, omega: np.ndarray, g: _Ground) -> _Contacts:
-        a, b, reg = self.half_track_m, self.half_base_m, self.regularization_mps
+        y_left, y_right, x_front, x_rear = self._arms
+        reg = self.regularization_mps
         u, v, r = state[:, U], state[:, V], state[:, R]
         # (side, n) and (axle, n), filled in place: np.stack costs more than the arithmetic here
-        ar, br = a * r, b * r
         vx = np.empty((2, len(u)))
-        np.subtract(u, ar, out=vx[0])
-        np.add(u, ar, out=vx[1])
+        np.subtract(u, y_left * r, out=vx[0])
+        np.subtract(u, y_right * r, out=vx[1])
         vy = np.empty((2, len(v)))
-        np.add(v, br, out=vy[0])
-        np.subtract(v, br, out=vy[1])
+        np.add(v, x_front * r, out=vy[0])
+        np.add(v, x_rear * r, out=vy[1])
         w = omega.T * g.surface_m
         sx = vx - w
         rolling = np.maximum(np.abs(w), np.abs(vx))
@@ -186,7 +225,10 @@ class SkidModel:
         state, omega = _as_batch(state, omega)
         g = self._ground(c, load_scale)
         k = self._contacts(state, omega, g)
-        fx = -g.mu_peak * k.secant * (k.vx - k.w)[:, None, :] - (k.k_roll * k.vx)[:, None, :]
+        reg = self.regularization_mps
+        load = np.broadcast_to(g.load_n, k.secant.shape)
+        roll = g.c_rr * load * (k.vx / np.sqrt(k.vx * k.vx + reg * reg))[:, None, :]
+        fx = -g.mu_peak * k.secant * (k.vx - k.w)[:, None, :] - roll
         fy = -g.mu_lateral * k.secant * k.vy[None, :, :]
         return fx.reshape(4, -1).T, fy.reshape(4, -1).T
 
@@ -202,20 +244,30 @@ class SkidModel:
         c: Coeffs,
         wrench: np.ndarray | None = None,
         load_scale: np.ndarray | None = None,
+        ground_accel_mps2: np.ndarray | None = None,
     ) -> np.ndarray:
-        """Time derivative of the state (n, 6): Newton-Euler in the body frame."""
+        """Time derivative of the state (n, 6): Newton-Euler at the centre of mass, body frame.
+
+        `ground_accel_mps2` (n, 2), if given, shifts the wheels' loads (`params.wheel_loads`).
+        """
         state, omega = _as_batch(state, omega)
-        g = self._ground(c, load_scale)
+        g = self._ground(c, load_scale, ground_accel_mps2)
         k = self._contacts(state, omega, g)
         lin, yaw = self._damping(state, g)
-        a, b = self.half_track_m, self.half_base_m
+        y_left, y_right, x_front, x_rear = self._arms
         m, inertia = self.robot.mass_kg, self.robot.yaw_inertia_kgm2
         u, v, r, th = state[:, U], state[:, V], state[:, R], state[:, HEADING]
-        fx_side = -k.kx_side * (k.vx - k.w) - 2.0 * k.k_roll * k.vx  # (2, n) left, right
+        fx_side = -k.kx_side * (k.vx - k.w) - k.k_roll * k.vx  # (2, n) left, right
         fy_axle = -k.ky_axle * k.vy  # (2, n) front, rear
         force_x = fx_side[0] + fx_side[1] - lin * u
         force_y = fy_axle[0] + fy_axle[1] - lin * v
-        moment = b * (fy_axle[0] - fy_axle[1]) - a * (fx_side[0] - fx_side[1]) - (yaw + k.k_spin) * r
+        moment = (
+            x_front * fy_axle[0]
+            + x_rear * fy_axle[1]
+            - y_left * fx_side[0]
+            - y_right * fx_side[1]
+            - (yaw + k.k_spin) * r
+        )
         if wrench is not None:
             ext = np.broadcast_to(wrench, (state.shape[0], 3))
             force_x, force_y, moment = force_x + ext[:, 0], force_y + ext[:, 1], moment + ext[:, 2]
@@ -237,8 +289,13 @@ class SkidModel:
         wrench: np.ndarray | None = None,
         load_scale: np.ndarray | None = None,
         traction_out: np.ndarray | None = None,
+        ground_accel_mps2: np.ndarray | None = None,
     ) -> np.ndarray:
         """Advance n robots by `dt_s`: linearly implicit in the velocities, then the pose.
+
+        `ground_accel_mps2` (n, 2), if given, is the in-plane ground force per unit mass (body
+        frame) that shifts load between the wheels (`params.wheel_loads`); without it the loads
+        are static (still shared by where the centre of mass is).
 
         `traction_out` (n, 2), if given, receives each side's slip traction at the new velocities
         (the longitudinal contact force without rolling resistance, N): what the motors push with,
@@ -253,23 +310,31 @@ class SkidModel:
         form. Dissipation can then never overshoot, whatever the step.
         """
         state, omega = _as_batch(state, omega)
-        g = self._ground(c, load_scale)
+        g = self._ground(c, load_scale, ground_accel_mps2)
         k = self._contacts(state, omega, g)
         lin, yaw = self._damping(state, g)
-        a, b = self.half_track_m, self.half_base_m
+        y_left, y_right, x_front, x_rear = self._arms
         m, inertia = self.robot.mass_kg, self.robot.yaw_inertia_kgm2
         u, v, r = state[:, U], state[:, V], state[:, R]
-        kx = k.kx_side + 2.0 * k.k_roll  # (2, n) per side, slip and rolling together
+        kx = k.kx_side + k.k_roll  # (2, n) per side, slip and rolling together
         drive = k.kx_side * k.w
         kx_sum, ky_sum = kx[0] + kx[1], k.ky_axle[0] + k.ky_axle[1]
         a11 = m / dt_s + kx_sum + lin
         a22 = m / dt_s + ky_sum + lin
-        a13 = -a * (kx[0] - kx[1])
-        a23 = b * (k.ky_axle[0] - k.ky_axle[1])
-        a33 = inertia / dt_s + b * b * ky_sum + a * a * kx_sum + yaw + k.k_spin
+        a13 = -(y_left * kx[0] + y_right * kx[1])
+        a23 = x_front * k.ky_axle[0] + x_rear * k.ky_axle[1]
+        a33 = (
+            inertia / dt_s
+            + x_front * x_front * k.ky_axle[0]
+            + x_rear * x_rear * k.ky_axle[1]
+            + y_left * y_left * kx[0]
+            + y_right * y_right * kx[1]
+            + yaw
+            + k.k_spin
+        )
         b1 = m * (u / dt_s + v * r) + drive[0] + drive[1]
         b2 = m * (v / dt_s - u * r)
-        b3 = inertia / dt_s * r - a * (drive[0] - drive[1])
+        b3 = inertia / dt_s * r - (y_left * drive[0] + y_right * drive[1])
         if wrench is not None:
             ext = (
                 wrench
@@ -282,8 +347,8 @@ class SkidModel:
         u_new = (b1 - a13 * r_new) / a11
         v_new = (b2 - a23 * r_new) / a22
         if traction_out is not None:
-            traction_out[:, 0] = k.kx_side[0] * (k.w[0] - (u_new - a * r_new))
-            traction_out[:, 1] = k.kx_side[1] * (k.w[1] - (u_new + a * r_new))
+            traction_out[:, 0] = k.kx_side[0] * (k.w[0] - (u_new - y_left * r_new))
+            traction_out[:, 1] = k.kx_side[1] * (k.w[1] - (u_new - y_right * r_new))
         out = np.empty_like(state)
         heading_mid = state[:, HEADING] + 0.5 * dt_s * r_new
         cos_h, sin_h = np.cos(heading_mid), np.sin(heading_mid)
@@ -295,6 +360,39 @@ class SkidModel:
         out[:, R] = r_new
         return out
 
+    def state_at_rest(self, pose: np.ndarray) -> np.ndarray:
+        """States (n, 6) at rest for poses (n, 3) of the wheel centre, where runs measure the pose:
+        the state's position is the centre of mass's, `com_x_m` ahead and `com_y_m` left of it."""
+        pose = np.atleast_2d(np.asarray(pose, dtype=np.float64))
+        state = np.zeros((pose.shape[0], 6))
+        state[:, :3] = pose
+        xc, yc = self.robot.com_x_m, self.robot.com_y_m
+        cos_h, sin_h = np.cos(pose[:, 2]), np.sin(pose[:, 2])
+        state[:, X] += xc * cos_h - yc * sin_h
+        state[:, Y] += xc * sin_h + yc * cos_h
+        return state
+
+    def wheel_centre_pose(self, states: np.ndarray) -> np.ndarray:
+        """Poses (..., 3) of the wheel centre for states (..., 6): the inverse of `state_at_rest`."""
+        pose = np.array(states[..., :3], dtype=np.float64)
+        xc, yc = self.robot.com_x_m, self.robot.com_y_m
+        cos_h, sin_h = np.cos(pose[..., 2]), np.sin(pose[..., 2])
+        pose[..., 0] -= xc * cos_h - yc * sin_h
+        pose[..., 1] -= xc * sin_h + yc * cos_h
+        return pose
+
+    def ground_accel(
+        self, before: np.ndarray, after: np.ndarray, dt_s: float, wrench: np.ndarray | None = None
+    ) -> np.ndarray:
+        """In-plane ground force per unit mass (n, 2) over a step from the state change: the
+        centre of mass's body-frame acceleration (du/dt - v r, dv/dt + u r) less the external
+        force per mass. What shifts load between the wheels (`params.wheel_loads`)."""
+        u, v, r = after[:, U], after[:, V], after[:, R]
+        acc = np.stack([(u - before[:, U]) / dt_s - v * r, (v - before[:, V]) / dt_s + u * r], -1)
+        if wrench is not None:
+            acc -= np.broadcast_to(wrench, (after.shape[0], 3))[:, :2] / self.robot.mass_kg
+        return acc
+
     def simulate_fixed(
         self,
         state0: np.ndarray,
@@ -303,9 +401,11 @@ class SkidModel:
         t_end_s: float,
         dt_s: float,
         wrench: np.ndarray | None = None,
+        load_transfer: bool = True,
     ) -> tuple[np.ndarray, np.ndarray]:
         """Fixed-step run from 0 to `t_end_s`; `omega_of_t(t0, t1)` gives the mean wheel speed on a step.
 
+        With `load_transfer`, each step's wheel loads follow the previous step's acceleration.
         Returns times (k+1,) and states (k+1, n, 6).
         """
         n_steps = int(np.ceil(t_end_s / dt_s - 1e-9))
@@ -313,10 +413,13 @@ class SkidModel:
         state = np.atleast_2d(np.asarray(state0, dtype=np.float64)).copy()
         states = np.empty((n_steps + 1, *state.shape))
         states[0] = state
+        accel = None
         for k in range(n_steps):
             h = times[k + 1] - times[k]
-            state = self.step(state, omega_of_t(times[k], times[k + 1]), c, h, wrench)
-            states[k + 1] = state
+            new = self.step(state, omega_of_t(times[k], times[k + 1]), c, h, wrench, ground_accel_mps2=accel)
+            if load_transfer:
+                accel = self.ground_accel(state, new, h, wrench)
+            state = states[k + 1] = new
         return times, states
 
     def simulate_adaptive(
@@ -329,6 +432,7 @@ class SkidModel:
         rtol: float = 1e-6,
         atol: float = 1e-8,
         max_step_s: float = np.inf,
+        load_transfer: bool = True,
     ) -> np.ndarray:
         """Adaptive run (scipy LSODA: switches to a stiff method where contacts stiffen).
 
@@ -338,7 +442,14 @@ class SkidModel:
         n = state0.shape[0]
 
         def rhs(t: float, flat: np.ndarray) -> np.ndarray:
-            return self.derivatives(flat.reshape(n, 6), omega_at(t), c, wrench).ravel()
+            state, omega = flat.reshape(n, 6), omega_at(t)
+            d = self.derivatives(state, omega, c, wrench)
+            if load_transfer:  # one fixed-point pass: loads from the acceleration they give
+                acc = np.stack([d[:, U] - state[:, V] * state[:, R], d[:, V] + state[:, U] * state[:, R]], -1)
+                if wrench is not None:
+                    acc -= np.broadcast_to(wrench, (n, 3))[:, :2] / self.robot.mass_kg
+                d = self.derivatives(state, omega, c, wrench, ground_accel_mps2=acc)
+            return d.ravel()
 
         sol = solve_ivp(
             rhs,

@@ -65,6 +65,9 @@ class TerrainMode:
     #: Fitted parameters of the thesis models on this ground: {"kinematic": {"alpha": .., "chi": ..},
     #: "lagrangian": {"robot_inertia_scale": .., "wheel_inertia_scale": ..}}
     model_params: Mapping[str, Mapping[str, float]] = field(default_factory=dict)
+    #: One standard deviation of each default, where the source states a range: how far
+    #: calibration may pull a coefficient from it before the prior pushes back.
+    uncertainty: Mapping[str, float] = field(default_factory=dict)
 
     @property
     def is_water(self) -> bool:
@@ -154,6 +157,8 @@ def mode_to_dict(mode: TerrainMode) -> dict:
     out.update({k: round(v, 6) for k, v in mode.coefficients().items()})
     for model, params in mode.model_params.items():
         out[model] = {k: round(float(v), 6) for k, v in params.items()}
+    if mode.uncertainty:
+        out["uncertainty"] = {k: round(float(v), 6) for k, v in mode.uncertainty.items()}
     if mode.sources:
         out["sources"] = dict(mode.sources)
     return out
@@ -163,12 +168,20 @@ def mode_to_dict(mode: TerrainMode) -> dict:
 MODEL_PARAMS: dict[str, tuple[str, ...]] = {
     "kinematic": ("heading_scale", "alpha", "chi"),
     "lagrangian": ("robot_inertia_scale", "wheel_inertia_scale"),
+    # robot values a `skid` fit found because the robot file did not state them
+    "skid": ("com_x_m", "com_y_m"),
 }
 
 
 def _check_positive(source: str | Path, where: str, value: object) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0 < value < 1e3:
         raise InputError(source, where, value, "a number in (0, 1000)")
+    return float(value)
+
+
+def _check_offset(source: str | Path, where: str, value: object) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not abs(value) < 10:
+        raise InputError(source, where, value, "an offset in metres, within +-10")
     return float(value)
 
 
@@ -198,7 +211,7 @@ def library_from_dict(data: object, source: str | Path, base: TerrainLibrary | N
     extra = set(data) - {"modes", "fitted"}
     if extra:
         raise InputError(source, sorted(extra)[0], sorted(extra)[0], "only the keys 'modes' (and 'fitted')")
-    allowed = {*COEFFICIENTS, *MODEL_PARAMS, "description", "passable", "sources", "like"}
+    allowed = {*COEFFICIENTS, *MODEL_PARAMS, "description", "passable", "sources", "like", "uncertainty"}
     modes: list[TerrainMode] = []
     for name, spec in data["modes"].items():
         where = f"modes.{name}"
@@ -242,6 +255,16 @@ def library_from_dict(data: object, source: str | Path, base: TerrainLibrary | N
                     source, f"{where}.sources", spec["sources"], "a mapping coefficient -> source"
                 )
             sources.update({str(k): str(v) for k, v in spec["sources"].items()})
+        uncertainty = dict(parent.uncertainty) if parent is not None else {}
+        if "uncertainty" in spec:
+            given = spec["uncertainty"]
+            if not isinstance(given, dict) or any(k not in COEFFICIENTS for k in given):
+                raise InputError(
+                    source, f"{where}.uncertainty", given, f"a mapping with keys from {list(COEFFICIENTS)}"
+                )
+            uncertainty.update(
+                {k: _check_positive(source, f"{where}.uncertainty.{k}", v) for k, v in given.items()}
+            )
         description = str(spec.get("description", parent.description if parent else ""))
         passable = spec.get("passable", parent.passable if parent else True)
         if not isinstance(passable, bool):
@@ -253,9 +276,8 @@ def library_from_dict(data: object, source: str | Path, base: TerrainLibrary | N
             given = spec[model]
             if not isinstance(given, dict) or any(k not in keys for k in given):
                 raise InputError(source, f"{where}.{model}", given, f"a mapping with keys from {list(keys)}")
-            model_params[model] = {
-                k: _check_positive(source, f"{where}.{model}.{k}", v) for k, v in given.items()
-            }
+            check = _check_offset if model == "skid" else _check_positive
+            model_params[model] = {k: check(source, f"{where}.{model}.{k}", v) for k, v in given.items()}
         modes.append(
             TerrainMode(
                 name=str(name),
@@ -263,6 +285,7 @@ def library_from_dict(data: object, source: str | Path, base: TerrainLibrary | N
                 passable=passable,
                 sources=sources,
                 model_params=model_params,
+                uncertainty=uncertainty,
                 **values,
             )
         )

@@ -18,6 +18,7 @@ from swarm.robot.terrain import (
     default_library,
     library_from_dict,
     load_library,
+    mode_to_dict,
 )
 
 BUNDLED_MODES = (
@@ -63,7 +64,7 @@ def test_every_coefficient_a_mode_sets_has_a_source():
     library = default_library()
     for name, spec in raw.items():
         mode = library[name]
-        set_here = {k for k in spec if k not in ("description", "sources", "like")}
+        set_here = {k for k in spec if k not in ("description", "sources", "like", "uncertainty")}
         needed = set(CORE) | set_here
         missing = sorted(needed - set(mode.sources))
         assert not missing, f"{name}: no source for {missing}"
@@ -477,3 +478,34 @@ def test_robot_inertia_matches_thesis_formulas():
     # The skid model's inertia boxes only the body and adds the four wheels about the axis.
     body = (m - 4 * mw) * (a * a + b * b) / 12
     assert robot.yaw_inertia_kgm2 == pytest.approx(body + 4 * wheel_about_axis, rel=1e-12)
+
+
+def test_uncertainty_and_a_fitted_centre_of_mass_read_back_and_are_checked(tmp_path):
+    """A mode's prior uncertainty and a skid fit's centre of mass survive a YAML round trip; a
+    bad value names the file and key."""
+    base = default_library()
+    spec = {
+        "modes": {
+            "beach": {
+                "like": "wet_hard_sand",
+                "uncertainty": {"mu_peak": 0.05},
+                "skid": {"com_x_m": -0.067, "com_y_m": 0.0},
+            }
+        }
+    }
+    mode = library_from_dict(spec, "fit.yaml", base)["beach"]
+    assert mode.uncertainty["mu_peak"] == 0.05
+    assert mode.uncertainty["rolling_resistance"] == base["wet_hard_sand"].uncertainty["rolling_resistance"]
+    assert mode.model_params["skid"] == {"com_x_m": -0.067, "com_y_m": 0.0}
+    again = library_from_dict({"modes": {"beach": mode_to_dict(mode)}}, "again.yaml")["beach"]
+    assert again.uncertainty == mode.uncertainty
+    assert again.model_params == mode.model_params
+    for key, bad in (
+        ("uncertainty", {"mu_peak": -1}),
+        ("uncertainty", {"grip": 0.1}),
+        ("skid", {"com_x_m": "aft"}),
+    ):
+        with pytest.raises(InputError) as exc:
+            library_from_dict({"modes": {"beach": {"like": "concrete", key: bad}}}, "bad.yaml", base)
+        assert exc.value.source == "bad.yaml"
+        assert exc.value.where.startswith(f"modes.beach.{key}")
