@@ -268,8 +268,8 @@ def test_fixed_step_converges_to_the_adaptive_solution() -> None:
         _, states = model.simulate_fixed(s0, lambda a, b: wheels.mean_speeds(a, b)[None], c, 6.0, dt)
         errors.append(np.hypot(*(states[-1, 0, :2] - exact[:2])))
     assert errors[2] < errors[1] < errors[0]
-    # converging, down to the floor of resampling the wheel input per step (about 0.15 mm here,
-    # with the wheel loads following the acceleration): a quarter of the step takes a third off
+    # converging, down to the floor of resampling the wheel input per step (about 0.15 mm here):
+    # a quarter of the step takes at least 30% off
     assert errors[2] < 0.7 * errors[0]
     assert errors[2] < 0.002
 
