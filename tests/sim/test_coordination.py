@@ -445,24 +445,34 @@ def test_a_retreat_from_beside_the_surf_waits_on_dry_ground(mine_clear_env) -> N
     assert env.dry_ground[cm.cell_of(end[0], end[1])], end
 
 
-@pytest.mark.slow
-def test_a_robot_on_station_goes_back_to_it_after_the_clearance(mine_clear_env) -> None:
-    """A station robot (route done) inside a marked mine's standoff retreats for the blast; when the
-    blast is over it drives back to its station (it used to stay where it had retreated to, and the
-    beacon criterion, held at the end of beach operations, failed)."""
-    env, policy = mine_clear_env
+def _beacon_on_station(
+    env: SwarmEnv, policy: ScriptedPolicy, *, marked_mine: bool
+) -> tuple[np.ndarray, np.ndarray]:
+    """Robot 0 alone on the map, a beacon at the end of its route at (480, 110); with
+    `marked_mine`, a mine 12 m from it marked (by robot 1). Returns the station and the mine."""
     env.reset(seed=1)
     policy.reset()
     station, mine = np.array([480.0, 110.0]), np.array([485.5, 99.5])
-    env.objects_m = mine[None].copy()
-    env.object_marker = np.array([1])
-    env.object_mine = np.array([-1])
+    if marked_mine:
+        env.objects_m = mine[None].copy()
+        env.object_marker = np.array([1])
+        env.object_mine = np.array([-1])
     env.on_map[:] = False
     env.on_map[0] = True
     env.robot_state[0, :2] = station
     env.set_route(0, station[None], role="beacon")
     env.routes.advance(env.robot_state[:, :2], env.on_map)
     assert env.routes.done()[0]
+    return station, mine
+
+
+@pytest.mark.slow
+def test_a_robot_on_station_goes_back_to_it_after_the_clearance(mine_clear_env) -> None:
+    """A station robot (route done) inside a marked mine's standoff retreats for the blast; when the
+    blast is over it drives back to its station (it used to stay where it had retreated to, and the
+    beacon criterion, held at the end of beach operations, failed)."""
+    env, policy = mine_clear_env
+    station, mine = _beacon_on_station(env, policy, marked_mine=True)
     policy._hold(300.0, 30.0)
     retreat = env.routes.points[env.routes.end[0] - 1]
     assert np.hypot(*(retreat - mine)) >= 30.0 - 1e-6
@@ -478,16 +488,9 @@ def test_a_robot_keeps_station_at_the_end_of_its_route(mine_clear_env) -> None:
     """A robot whose route is done stands still while it is within 1 m of the route's end, and
     drives back once it has been pushed further: on full_conops both beacon robots crept 3 m down
     the slope in two hours and the beacon criterion (held within 3 m at the end) failed."""
-    env, _ = mine_clear_env
-    env.reset(seed=1)
-    station = np.array([480.0, 110.0])
-    env.on_map[:] = False
-    env.on_map[0] = True
-    env.robot_state[0, :2] = station
+    env, policy = mine_clear_env
+    station, _ = _beacon_on_station(env, policy, marked_mine=False)
     env.robot_state[0, 2] = 0.0
-    env.set_route(0, station[None], role="beacon")
-    env.routes.advance(env.robot_state[:, :2], env.on_map)
-    assert env.routes.done()[0]
     env.robot_state[0, :2] = station + np.array([0.0, -0.8])
     wheels, _ = env.controller_commands()
     assert np.all(wheels[0] == 0.0)
@@ -502,17 +505,7 @@ def test_a_station_robot_lost_while_clear_of_the_blast_hands_on_its_station(mine
     its beacon point, not the point it retreated to (on full_conops the robot that took it over
     drove to the retreat point, 100 m from the beacon, and the beacon criterion failed)."""
     env, policy = mine_clear_env
-    env.reset(seed=1)
-    policy.reset()
-    station, mine = np.array([480.0, 110.0]), np.array([485.5, 99.5])
-    env.objects_m = mine[None].copy()
-    env.object_marker = np.array([1])
-    env.object_mine = np.array([-1])
-    env.on_map[:] = False
-    env.on_map[0] = True
-    env.robot_state[0, :2] = station
-    env.set_route(0, station[None], role="beacon")
-    env.routes.advance(env.robot_state[:, :2], env.on_map)
+    station, _ = _beacon_on_station(env, policy, marked_mine=True)
     policy._hold(300.0, 30.0)
     env.robot_state[0, :2] = env.routes.points[env.routes.end[0] - 1]  # at its retreat point
     policy._seen = len(env.events)
