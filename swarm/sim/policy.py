@@ -13,9 +13,10 @@ It drives the environment in command mode. Each step it:
    it, as links come and go. Jammed or isolated robots learn nothing.
 3. Every `realloc_period_s`, assigns open items to idle robots that know of them (spares, and
    searchers whose track is done) with the forward auction of `swarm.planning.allocation`, cost the
-   straight-line distance to the item; the winner gets a route there (`swarm.sim.router`). Routes
-   (a lost searcher's track, a lost station) go first; marks wait until they are due (nobody is
-   searching any more, or the clearance is near enough that the nearest free robot must set off).
+   straight-line distance to the item; the winner gets a route there (`swarm.sim.router`). Lost
+   stations go first (each is a whole criterion), then the pieces of lost tracks (each a sliver of
+   the detection); marks wait until they are due (nobody is searching any more, or the clearance
+   is near enough that the nearest free robot must set off).
    A searcher that finds a mine reports it and keeps searching: marking never consumes a
    searcher's track (the plan's detection counts on every track being driven). The mark goes to
    a reserve, or to a searcher once its track is done.
@@ -27,7 +28,8 @@ It drives the environment in command mode. Each step it:
    until the detonation, then resumes: the rest of its route, or back to its station. Before that, a
    robot with nothing to do waits clear of every found mine's standoff; after it (or with no
    clearance), the nearest robot with nothing to do stands by at each point that must be held at
-   the end (a beacon), so a loss in the last minutes leaves it held.
+   the end (a beacon), so a loss in the last minutes leaves it held; in the last
+   `STAND_BY_LEAD_S` of beach operations that stand-by comes before the lost tracks.
 5. At the end of beach operations (with the return to sea enabled), and for any robot whose battery
    falls to the reserve, the command is "return to sea".
 """
@@ -64,6 +66,10 @@ TAKEOVER_PIECE_M = 300.0
 #: A mark is handed out this long before the robot that takes it must set off to make the
 #: clearance, so a search still running can use the robot meanwhile (s).
 MARK_SLACK_S = 600.0
+#: In this last stretch of beach operations (after any clearance) the stand-bys at points held at
+#: the end come before the lost tracks (s): the time to drive 900 m of beach at 0.5 m/s, so a
+#: stand-by sent from anywhere is in place before the end.
+STAND_BY_LEAD_S = 1800.0
 SPARE, SEARCH, RELAY_ROLE = ROLES.index("spare"), ROLES.index("search"), ROLES.index("relay")
 LANDING = ROLES.index("landing")
 STATIONS = tuple(ROLES.index(r) for r in ("landing", "relay", "surveillance", "beacon"))
@@ -266,15 +272,27 @@ class ScriptedPolicy:
         )
 
     def _allocate(self) -> None:
-        """Hand open items to idle robots that know of them: routes (a lost robot's track or station)
-        first, then marks, and marks only when they are due (`_marks_due`): a robot loitering on a
-        mine early can neither finish a lost searcher's track nor dodge the hazards while it waits."""
+        """Hand open items to idle robots that know of them, most valuable first: stations (a lost
+        landing, relay, surveillance or beacon robot's point: each a whole criterion), then the
+        pieces of lost tracks (each a sliver of the detection), then marks, and marks only when
+        they are due (`_mark_due`): a robot loitering on a mine early can neither finish a lost
+        searcher's track nor dodge the hazards while it waits. In the last `STAND_BY_LEAD_S` of
+        beach operations the stand-bys at end-held beacons (`_stand_by`) come before the tracks
+        too, and stay out of their auctions."""
         env = self.env
-        idle = self._idle()
+        late = self._stand_by_first()
+        if late:
+            self._stand_by(self._idle())
         routes = [it for it in self.items if it.taken_by < 0 and it.kind == "route"]
-        if routes and idle.any():
-            self._auction(routes, idle)
-            idle = self._idle()
+        stations = [it for it in routes if not it.track]
+        if stations and self._idle().any():
+            self._auction(stations, self._idle())
+        kept = self._standing_by() if late else np.zeros(env.n, bool)
+        idle = self._idle() & ~kept
+        tracks = [it for it in routes if it.track and it.taken_by < 0]
+        if tracks and idle.any():
+            self._auction(tracks, idle)
+            idle = self._idle() & ~kept
         marks = [it for it in self.items if it.taken_by < 0 and it.kind == "mark"]
         marks = [it for it in marks if env.object_marker[it.obj] < 0]
         if marks and idle.any():
@@ -287,7 +305,35 @@ class ScriptedPolicy:
             if due and free.any():
                 self._auction(due, free)
         self._park(self._idle())
-        self._stand_by(self._idle())
+        if not late:
+            self._stand_by(self._idle())
+
+    def _stand_by_first(self) -> bool:
+        """Whether the stand-bys come before the tracks: in the last `STAND_BY_LEAD_S` of beach
+        operations, once no clearance is pending."""
+        env = self.env
+        if env.clearance is not None and self._clearance_state != "done":
+            return False
+        return env.t_s + STAND_BY_LEAD_S >= env.mission.phases.beach_end_s
+
+    def _end_held_points(self) -> list[tuple[np.ndarray, int]]:
+        """The points that must be held when beach operations end (beacons without `hold_s`), each
+        with the robots it needs."""
+        return [
+            (point, st.needed)
+            for st in self.env.score.beacons
+            if st.required_s is None
+            for point in st.points_m
+        ]
+
+    def _standing_by(self) -> np.ndarray:
+        """Idle robots whose route ends at a point that must be held at the end."""
+        env = self.env
+        goals = env._route_goal()
+        out = np.zeros(env.n, bool)
+        for point, _ in self._end_held_points():
+            out |= np.hypot(*(goals - point).T) <= STATION_RADIUS_M
+        return out & self._idle()
 
     def _stand_by(self, idle: np.ndarray) -> None:
         """Once no clearance is pending, a point that must be held at the end of beach operations
@@ -302,17 +348,14 @@ class ScriptedPolicy:
             return
         goals = env._route_goal()
         here = env.alive & env.on_map
-        for st in env.score.beacons:
-            if st.required_s is not None:
+        for point, needed in self._end_held_points():
+            near = here & (np.hypot(*(goals - point).T) <= STATION_RADIUS_M)
+            if np.count_nonzero(near) > needed or not idle.any():
                 continue
-            for point in st.points_m:
-                near = here & (np.hypot(*(goals - point).T) <= STATION_RADIUS_M)
-                if np.count_nonzero(near) > st.needed or not idle.any():
-                    continue
-                cand = np.flatnonzero(idle)
-                i = int(cand[np.argmin(np.hypot(*(env.robot_state[cand, :2] - point).T))])
-                env.set_route(i, env.router.route(env.robot_state[i, :2], point))
-                idle[i] = False
+            cand = np.flatnonzero(idle)
+            i = int(cand[np.argmin(np.hypot(*(env.robot_state[cand, :2] - point).T))])
+            env.set_route(i, env.router.route(env.robot_state[i, :2], point))
+            idle[i] = False
 
     def _park(self, idle: np.ndarray) -> None:
         """Idle robots wait clear of the standoff of every mine found so far while a clearance is

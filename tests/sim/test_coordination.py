@@ -13,6 +13,7 @@ from tiny_missions import write_mission
 
 from swarm.mission.load import load_mission
 from swarm.sim.env import BEACH, SwarmEnv
+from swarm.sim.layout import ROLES
 from swarm.sim.policy import ScriptedPolicy, WorkItem, split_polyline
 from swarm.sim.run import simulate
 
@@ -26,6 +27,7 @@ QUIET = {
 }
 #: A short-range radio (about 30 m with the 3 dB fade margin) so the small beach needs a relay chain.
 SHORT_RADIO = {"tx_power_dbm": 0.0, "rx_sensitivity_dbm": -70.0, "fade_margin_db": 3.0}
+SPARE = ROLES.index("spare")
 RELAY_TASK = {"type": "relay", "source": "relay_source", "sinks": ["relay_sink"], "radio": SHORT_RADIO}
 
 
@@ -535,3 +537,74 @@ def test_a_beacon_held_at_the_end_has_a_stand_by_and_survives_a_late_loss(tmp_pa
     env.lose(holder.id)
     _run(env, policy, env.time_limit_s + 1)
     assert env.outcome()["criteria"]["beacon"]["value"] == 1.0
+
+
+@pytest.mark.slow
+def test_a_lost_station_is_taken_over_before_the_pieces_of_a_lost_track(tmp_path) -> None:
+    """A station is a whole criterion (a surveillance point watched for its dwell, or not at all);
+    a piece of a lost track is a sliver of the detection. So an idle robot goes to the station
+    first, even when a piece of track is nearer (full_conops lost its lookout for 65 min while
+    every spare finished tracks, and failed surveillance in 3 runs of 100)."""
+    search = {
+        "type": "search",
+        "area": "search_beach",
+        "sensor": {"model": "cookie_cutter", "sweep_width_m": 4.0},
+        "robots": 1,
+        "mark": False,
+    }
+    lookout = {"type": "surveillance", "points": ["dune_lookout"], "dwell_s": 60.0}
+    path = write_mission(tmp_path, swarm={"count": 3}, tasks=[search, lookout], hazards=QUIET)
+    env = SwarmEnv(load_mission(path), action_mode="command")
+    policy = ScriptedPolicy(env)
+    env.reset(seed=0)
+    searcher = next(r for r in env.plan.robots if r.role == "search")
+    watcher = next(r for r in env.plan.robots if r.role == "surveillance")
+    i = env.agent_index[searcher.id]
+    while not env.routes.in_track()[i]:
+        policy.update()
+        env.advance({})
+    _run(env, policy, env.t_s + 30.0)
+    spare = next(k for k in range(env.n) if env.alive[k] and env.role[k] == SPARE and k != i)
+    point = np.array(env.score.surveillance[0].points_m[0])
+    track = env.routes.remaining_track(i)
+    # the test means something only if the track is the nearer job
+    here = env.robot_state[spare, :2]
+    assert np.min(np.hypot(*(track - here).T)) < np.hypot(*(point - here))
+    env.lose(searcher.id)
+    env.lose(watcher.id)
+    _run(env, policy, env.t_s + 20.0)
+    takes = [ev for ev in env.events if ev["kind"] == "takeover"]
+    assert takes and takes[0]["role"] == "surveillance"
+
+
+@pytest.mark.slow
+def test_after_the_clearance_a_beacon_gets_its_stand_by_before_any_track_is_taken_over(tmp_path) -> None:
+    """The stand-by at a beacon held at the end is a hedge on a whole criterion: it comes before
+    the lost tracks (full_conops failed its beacon in 4 runs of 100 because every idle robot went
+    on searching after the clearance and none stood by)."""
+    search = {
+        "type": "search",
+        "area": "search_beach",
+        "sensor": {"model": "cookie_cutter", "sweep_width_m": 4.0},
+        "robots": 1,
+        "mark": False,
+    }
+    beacon = {"type": "beacon", "points": [[55.0, 52.0]], "robots_per_point": 1}
+    path = write_mission(tmp_path, swarm={"count": 3}, tasks=[search, beacon], hazards=QUIET)
+    env = SwarmEnv(load_mission(path), action_mode="command")
+    policy = ScriptedPolicy(env)
+    env.reset(seed=0)
+    searcher = next(r for r in env.plan.robots if r.role == "search")
+    i = env.agent_index[searcher.id]
+    while not env.routes.in_track()[i]:
+        policy.update()
+        env.advance({})
+    _run(env, policy, env.t_s + 30.0)
+    spare = env.agent_index[next(r.id for r in env.plan.robots if r.role == "spare")]
+    point = np.array([55.0, 52.0])
+    assert np.hypot(*(env._route_goal()[spare] - point)) <= 3.0  # standing by
+    env.lose(searcher.id)
+    _run(env, policy, env.t_s + 20.0)
+    assert np.hypot(*(env._route_goal()[spare] - point)) <= 3.0
+    assert env.role[spare] == SPARE
+    assert not [ev for ev in env.events if ev["kind"] == "takeover"]
