@@ -127,6 +127,7 @@ class ScriptedPolicy:
         self._seen = 0
         self._next_alloc_s = 0.0
         self._held: dict[int, tuple[np.ndarray, bool]] = {}
+        self._waiting: dict[int, np.ndarray] = {}  # stand-by waiting out a clearance -> its point
         self._clearance_state = "before"
         self._returning = False
         self._links_seen = -1
@@ -310,10 +311,8 @@ class ScriptedPolicy:
 
     def _stand_by_first(self) -> bool:
         """Whether the stand-bys come before the tracks: in the last `STAND_BY_LEAD_S` of beach
-        operations, once no clearance is pending."""
+        operations."""
         env = self.env
-        if env.clearance is not None and self._clearance_state != "done":
-            return False
         return env.t_s + STAND_BY_LEAD_S >= env.mission.phases.beach_end_s
 
     def _end_held_points(self) -> list[tuple[np.ndarray, int]]:
@@ -329,7 +328,7 @@ class ScriptedPolicy:
     def _standing_by(self) -> np.ndarray:
         """Idle robots whose route ends at a point that must be held at the end."""
         env = self.env
-        goals = env._route_goal()
+        goals = self._station_goals()
         out = np.zeros(env.n, bool)
         for point, _ in self._end_held_points():
             out |= np.hypot(*(goals - point).T) <= STATION_RADIUS_M
@@ -339,23 +338,47 @@ class ScriptedPolicy:
         """Once no clearance is pending, a point that must be held at the end of beach operations
         (a beacon without `hold_s`) gets one robot more than it needs, the nearest idle one: a
         beacon robot lost in the last minutes cannot be replaced from across the beach in time
-        (full_conops failed its beacon criterion that way). A stand-by stays idle: it takes over
-        like any other, and another comes when it leaves."""
+        (full_conops failed its beacon criterion that way). In the last `STAND_BY_LEAD_S` it does
+        not wait for a clearance still to come: it goes to the point, or, when the point lies in a
+        found mine's standoff, waits on the nearest safe ground and moves in once the mines are
+        cleared (waiting for the clearance left full_conops's stand-bys 440 m away, still
+        driving, when a beacon robot failed 50 s before the end). A stand-by stays idle: it takes
+        over like any other, and another comes when it leaves."""
         env = self.env
         if self._returning or not idle.any():
             return
-        if env.clearance is not None and self._clearance_state != "done":
+        pending = env.clearance is not None and self._clearance_state != "done"
+        if pending and not self._stand_by_first():
             return
-        goals = env._route_goal()
+        objs, safe_m, _ = self._inside_standoff(np.empty(0, dtype=np.intp)) if pending else (None, 0.0, None)
+        goals = self._station_goals()
         here = env.alive & env.on_map
-        for point, needed in self._end_held_points():
+        points = self._end_held_points()
+        # a robot already holding or standing by at one of the points is never moved to another
+        at_a_point = np.zeros(env.n, bool)
+        for point, _ in points:
+            at_a_point |= np.hypot(*(goals - point).T) <= STATION_RADIUS_M
+        idle = idle & ~at_a_point
+        for point, needed in points:
             near = here & (np.hypot(*(goals - point).T) <= STATION_RADIUS_M)
             if np.count_nonzero(near) > needed or not idle.any():
                 continue
             cand = np.flatnonzero(idle)
             i = int(cand[np.argmin(np.hypot(*(env.robot_state[cand, :2] - point).T))])
-            env.set_route(i, env.router.route(env.robot_state[i, :2], point))
+            goal = point
+            if objs is not None and len(objs) and float(np.min(np.hypot(*(objs - point).T))) < safe_m:
+                goal = self._safe_ground(objs, safe_m).path(env.router.snap(point))[-1]
+                self._waiting[i] = point.copy()
+            env.set_route(i, env.router.route(env.robot_state[i, :2], goal))
             idle[i] = False
+
+    def _station_goals(self) -> np.ndarray:
+        """Where each robot's route ends, or, for a stand-by waiting out a clearance, the point
+        it waits to hold."""
+        goals = self.env._route_goal().copy()
+        for i, point in self._waiting.items():
+            goals[i] = point
+        return goals
 
     def _park(self, idle: np.ndarray) -> None:
         """Idle robots wait clear of the standoff of every mine found so far while a clearance is
@@ -411,6 +434,7 @@ class ScriptedPolicy:
     def _take(self, i: int, it: WorkItem) -> None:
         env = self.env
         it.taken_by = i
+        self._waiting.pop(i, None)
         env._event("takeover", i, item=it.kind, role=it.role, obj=it.obj)
         if it.kind == "mark":
             env.set_command(i, MARK, env.objects_m[it.obj])
@@ -460,6 +484,10 @@ class ScriptedPolicy:
                 wp = np.vstack([path, more[1:]])
                 env.set_route(i, wp, track_from=len(path) - 1 if in_track else None)
             self._held.clear()
+            for i, point in self._waiting.items():
+                if env.alive[i] and env.marking[i] < 0:
+                    env.set_route(i, env.router.route(env.robot_state[i, :2], point))
+            self._waiting.clear()
 
     def _hold_due(self) -> bool:
         """Time to hold: `lead_s` before the detonation, or earlier when a robot within a found

@@ -14,7 +14,7 @@ from tiny_missions import write_mission
 from swarm.mission.load import load_mission
 from swarm.sim.env import BEACH, SwarmEnv
 from swarm.sim.layout import ROLES
-from swarm.sim.policy import ScriptedPolicy, WorkItem, split_polyline
+from swarm.sim.policy import STANDOFF_MARGIN_M, ScriptedPolicy, WorkItem, split_polyline
 from swarm.sim.run import simulate
 
 #: Hazards that take nobody: for tests that isolate one mechanism.
@@ -608,3 +608,109 @@ def test_after_the_clearance_a_beacon_gets_its_stand_by_before_any_track_is_take
     assert np.hypot(*(env._route_goal()[spare] - point)) <= 3.0
     assert env.role[spare] == SPARE
     assert not [ev for ev in env.events if ev["kind"] == "takeover"]
+
+
+@pytest.mark.slow
+def test_a_beacon_gets_its_stand_by_before_a_late_clearance_when_no_found_mine_is_near(tmp_path) -> None:
+    """In the last `STAND_BY_LEAD_S` the stand-by does not wait for a pending clearance when the
+    beacon is clear of every mine found: waiting left full_conops's stand-bys 440 m away, still
+    driving, when a beacon robot failed 50 s before the end."""
+    search = {
+        "type": "search",
+        "area": "search_beach",
+        "sensor": {"model": "cookie_cutter", "sweep_width_m": 4.0},
+        "robots": 1,
+        "mark": True,
+        "clearance": {"at_s": 550.0, "standoff_m": 10.0},
+    }
+    beacon = {"type": "beacon", "points": [[55.0, 52.0]], "robots_per_point": 1}
+    hazards = {**QUIET, "mines": {"count": 0}}
+    path = write_mission(tmp_path, swarm={"count": 3}, tasks=[search, beacon], hazards=hazards)
+    env = SwarmEnv(load_mission(path), action_mode="command")
+    policy = ScriptedPolicy(env)
+    env.reset(seed=0)
+    _run(env, policy, 540.0)
+    assert not env.cleared
+    spare = env.agent_index[next(r.id for r in env.plan.robots if r.role == "spare")]
+    assert np.hypot(*(env.robot_state[spare, :2] - np.array([55.0, 52.0]))) <= 3.0
+
+
+@pytest.mark.slow
+def test_a_late_loss_at_one_beacon_does_not_pull_the_stand_by_off_the_other(tmp_path) -> None:
+    """Two beacons, each with its robot and a stand-by. Losing one beacon robot near the end
+    leaves its stand-by holding that point, and the other point keeps its own: a robot at one
+    end-held point is never sent to another (full_conops swapped two stand-bys 40 m apart 40 s
+    before the end, and neither got there)."""
+    points = [[55.0, 52.0], [75.0, 52.0]]
+    search = {
+        "type": "search",
+        "area": "search_beach",
+        "sensor": {"model": "cookie_cutter", "sweep_width_m": 4.0},
+        "robots": 1,
+        "mark": False,
+    }
+    beacon = {"type": "beacon", "points": points, "robots_per_point": 1}
+    path = write_mission(tmp_path, swarm={"count": 5}, tasks=[search, beacon], hazards=QUIET)
+    env = SwarmEnv(load_mission(path), action_mode="command")
+    policy = ScriptedPolicy(env)
+    env.reset(seed=0)
+    end = env.mission.phases.beach_end_s
+    _run(env, policy, end - 40.0)
+    here = env.robot_state[:, :2]
+    for p in points:
+        assert np.count_nonzero(env.alive & (np.hypot(*(here - np.array(p)).T) <= 3.0)) == 2
+    other = [i for i in range(env.n) if np.hypot(*(here[i] - np.array(points[1]))) <= 3.0]
+    holder = next(
+        r for r in env.plan.robots if r.role == "beacon" and np.hypot(*(r.waypoints_m[-1] - points[0])) <= 3.0
+    )
+    env.lose(holder.id)
+    _run(env, policy, env.time_limit_s + 1)
+    assert env.outcome()["criteria"]["beacon"]["value"] == 1.0
+    for i in other:
+        assert np.hypot(*(env._route_goal()[i] - np.array(points[1]))) <= 3.0
+
+
+@pytest.mark.slow
+def test_a_stand_by_waits_out_a_late_clearance_clear_of_the_mines_then_moves_in(tmp_path) -> None:
+    """A beacon inside a found mine's standoff, with the clearance late in beach operations: its
+    stand-by waits on the nearest safe ground while the clearance is pending, and holds the point
+    with the beacon robot once the mines are gone."""
+    search = {
+        "type": "search",
+        "area": "search_beach",
+        "sensor": {"model": "cookie_cutter", "sweep_width_m": 4.0},
+        "robots": 2,
+        "mark": True,
+        "clearance": {"at_s": 900.0, "standoff_m": 8.0},
+    }
+    point = np.array([55.0, 52.0])
+    beacon = {"type": "beacon", "points": [point.tolist()], "robots_per_point": 1}
+    hazards = {**QUIET, "mines": {"count": 12, "trigger_probability": 0.0}}
+    phases = {
+        "sea_transit": {"time_limit_s": 300},
+        "surf_crossing": {"time_limit_s": 300},
+        "beach_operations": {"time_limit_s": 600},
+        "return_to_sea": {"enabled": False},
+    }
+    path = write_mission(tmp_path, swarm={"count": 5}, tasks=[search, beacon], hazards=hazards, phases=phases)
+    env = SwarmEnv(load_mission(path), action_mode="command")
+    policy = ScriptedPolicy(env)
+    env.reset(seed=0)
+    _run(env, policy, 895.0)
+    found = sorted({it.obj for it in policy.items if it.kind == "mark"})
+    safe_m = env.clearance.standoff_m + STANDOFF_MARGIN_M
+    mines = env.objects_m[found]
+    assert np.min(np.hypot(*(mines - point).T)) < safe_m  # the point is in a standoff
+    holder = env.agent_index[next(r.id for r in env.plan.robots if r.role == "beacon")]
+    goals = policy._station_goals()
+    (stand_by,) = [
+        i
+        for i in range(env.n)
+        if i != holder and env.alive[i] and env.marking[i] < 0 and np.hypot(*(goals[i] - point)) <= 3.0
+    ]
+    gap = np.min(np.hypot(*(mines - env.robot_state[stand_by, :2]).T))
+    assert gap >= env.clearance.standoff_m
+    _run(env, policy, env.mission.phases.beach_end_s - 5.0)
+    assert env.cleared and env.alive[stand_by] and env.alive[holder]
+    for i in (stand_by, holder):
+        assert np.hypot(*(env.robot_state[i, :2] - point)) <= 3.0
