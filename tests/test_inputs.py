@@ -81,3 +81,86 @@ def test_an_empty_file_and_a_union_name_what_was_meant(tmp_path) -> None:
     with pytest.raises(InputError) as err:
         load_map(src)
     assert ".kind: found 'launchpad', expected one of 'launch'," in str(err.value)
+
+
+ROBOT_YAML = DATA / "robots" / "skid4.yaml"
+
+
+@pytest.mark.parametrize(
+    ("key", "name", "text", "expected"),
+    [
+        (
+            "robot.file",
+            "robot.yaml",
+            ROBOT_YAML.read_text().replace("mass_kg: 30.0", "mass_kg: -30.0"),
+            "mass_kg: found -30.0, expected a number in kilograms > 0",
+        ),
+        (
+            "robot.terrain",
+            "terrain.yaml",
+            "modes:\n  wet_hard_sand:\n    mu_peak: 7\n",
+            "modes.wet_hard_sand.mu_peak: found 7, expected a number in [0, 5]: peak longitudinal traction"
+            " coefficient (traction / normal load), >= 0",
+        ),
+    ],
+)
+def test_a_bad_robot_or_terrain_file_is_one_line_and_exit_2_in_swarm_plan(
+    key, name, text, expected, tmp_path, capsys
+) -> None:
+    from swarm.cli import main
+
+    path = tmp_path / name
+    path.write_text(text)
+    out = tmp_path / "out"
+    argv = ["plan", str(REPO / "missions" / "landing.yaml"), "--set", f"{key}={path}", "--out", str(out)]
+    assert main(argv) == 2
+    assert capsys.readouterr().err == f"swarm: error: {path}: {expected}\n"
+    assert not out.exists()
+
+
+def test_robot_counts_take_integer_valued_floats(tmp_path) -> None:
+    path = tmp_path / "robot.yaml"
+    text = ROBOT_YAML.read_text()
+    path.write_text(
+        text.replace("encoder_ticks_per_wheel_rev: 1960", "encoder_ticks_per_wheel_rev: 2e3\nn_wheels: 4.0")
+    )
+    robot = load_robot(path)
+    assert robot.encoder_ticks_per_wheel_rev == 2000 and type(robot.encoder_ticks_per_wheel_rev) is int
+    assert robot.n_wheels == 4 and type(robot.n_wheels) is int
+    for value, expected in (("1960.5", "a whole number"), ("3", "2 or 4")):
+        key = "n_wheels" if value == "3" else "encoder_ticks_per_wheel_rev"
+        path.write_text(text.replace("encoder_ticks_per_wheel_rev: 1960", f"{key}: {value}"))
+        with pytest.raises(InputError) as err:
+            load_robot(path)
+        assert str(err.value) == f"{path}: {key}: found {value}, expected {expected}"
+
+
+@pytest.mark.parametrize(
+    ("spec", "where", "found", "expected"),
+    [
+        ("kinematic: {alpha: 0}", "kinematic.alpha", "0", "a number in (0, 1000)"),
+        ("skid: {com_x_m: 12.5}", "skid.com_x_m", "12.5", "an offset in metres, within +-10"),
+        ("uncertainty: {mu_peak: -0.1}", "uncertainty.mu_peak", "-0.1", "a number in (0, 1000)"),
+        ("mu_lateral: null", "mu_lateral", "None", "a number"),  # null is not "inherit"
+        ("passable: 'no'", "passable", "'no'", "true or false"),
+        ("sources: {mu_peak: 3}", "sources.mu_peak", "3", "a string"),
+    ],
+)
+def test_terrain_mode_keys_one_line(spec, where, found, expected, tmp_path) -> None:
+    path = tmp_path / "t.yaml"
+    path.write_text(f"modes:\n  concrete:\n    {spec}\n")
+    with pytest.raises(InputError) as err:
+        load_library(path)
+    assert str(err.value) == f"{path}: modes.concrete.{where}: found {found}, expected {expected}"
+
+
+def test_terrain_unknown_keys_list_the_known_ones(tmp_path) -> None:
+    path = tmp_path / "t.yaml"
+    path.write_text("modes:\n  concrete:\n    uncertainty: {mu_peek: 0.1}\n")
+    with pytest.raises(InputError) as err:
+        load_library(path)
+    known = "mu_peak, mu_lateral, shear_slip, rolling_resistance, turning_resistance_m"
+    where = "modes.concrete.uncertainty.mu_peek"
+    assert str(err.value).startswith(
+        f"{path}: {where}: found 'mu_peek', expected no such key (known keys: {known}"
+    )
