@@ -164,3 +164,84 @@ def test_terrain_unknown_keys_list_the_known_ones(tmp_path) -> None:
     assert str(err.value).startswith(
         f"{path}: {where}: found 'mu_peek', expected no such key (known keys: {known}"
     )
+
+
+@pytest.mark.parametrize(
+    ("text", "key", "line"),
+    [
+        ('{\n "a": {"b": 1, "c": [{"b": 2}]},\n "x": {\n  "b": 3,\n  "b": 4\n }\n}\n', "b", 5),
+        # the same key in a nested object, on an earlier line, is no repeat; the top level's is
+        (
+            '{"mission": "m",\n "points": [{"mission": 1, "x": {"mission": 2}}],\n "mission": "n"}',
+            "mission",
+            3,
+        ),
+        ('[{"k": 1}, {"k": 2, "j": 0,\n\n"k": 3}]', "k", 3),
+    ],
+)
+def test_a_json_key_given_twice_is_an_error_naming_it_and_its_line(text, key, line, tmp_path) -> None:
+    from swarm.files import read_json
+
+    path = tmp_path / "x.json"
+    path.write_text(text)
+    with pytest.raises(InputError) as err:
+        read_json(path, "study.json")
+    assert str(err.value) == f"{path}: line {line}: found {key!r}, expected each key once in an object"
+
+
+def _report(folder: Path, capsys) -> tuple[int, str]:
+    from swarm.cli import main
+
+    code = main(["report", str(folder), "-o", str(folder / "report.md")])
+    return code, capsys.readouterr().err
+
+
+def test_swarm_report_refuses_a_json_key_given_twice(tmp_path, capsys) -> None:
+    """plan.json, summary.json: the key and the line of its second appearance, exit 2."""
+    (tmp_path / "plan.json").write_text('{\n "mission": "a",\n "seed": 1,\n "mission": "b"\n}\n')
+    code, err = _report(tmp_path, capsys)
+    assert code == 2
+    twice = "expected each key once in an object"
+    assert err == f"swarm: error: {tmp_path / 'plan.json'}: line 4: found 'mission', {twice}\n"
+    (tmp_path / "plan.json").unlink()
+    (tmp_path / "results.parquet").write_bytes(b"")
+    (tmp_path / "summary.json").write_text('{"runs": 3,\n "points": [],\n "runs": 4}')
+    code, err = _report(tmp_path, capsys)
+    assert code == 2
+    assert err == f"swarm: error: {tmp_path / 'summary.json'}: line 3: found 'runs', {twice}\n"
+    assert not (tmp_path / "report.md").exists()
+
+
+@pytest.mark.parametrize(
+    ("change", "where", "found", "expected"),
+    [
+        ({"runs": "3"}, "points[0].runs", "'3'", "a whole number"),
+        ({"runs": -1}, "points[0].runs", "-1", "a whole number >= 0"),
+        ({"success_rate": None}, "points[0].success_rate", "None", "a number"),
+        ({"wilson_low": "0.4"}, "points[0].wilson_low", "'0.4'", "a number"),
+        ({"losses_by_cause": {"surf": 1.5}}, "points[0].losses_by_cause.surf", "1.5", "a whole number"),
+    ],
+)
+def test_swarm_report_checks_a_study_summary(change, where, found, expected, tmp_path, capsys) -> None:
+    """summary.json goes through `SummaryFile`: a bad value is one line naming its key, exit 2."""
+    import json
+
+    point = {"index": 0, "params": {"swarm.count": 3}, "runs": 3, "successes": 2, "success_rate": 0.667}
+    point |= {"wilson_low": 0.21, "wilson_high": 0.94} | change
+    (tmp_path / "summary.json").write_text(json.dumps({"mission": "m", "runs": 3, "points": [point]}))
+    (tmp_path / "results.parquet").write_bytes(b"")
+    code, err = _report(tmp_path, capsys)
+    assert code == 2
+    assert err == f"swarm: error: {tmp_path / 'summary.json'}: {where}: found {found}, expected {expected}\n"
+    assert not (tmp_path / "report.md").exists()
+
+
+def test_a_json_lines_record_counts_lines_from_its_place_in_the_file() -> None:
+    """events.jsonl is parsed a line at a time: the error names the file's line, not the record's."""
+    from swarm.files import parse_json
+
+    with pytest.raises(InputError) as err:
+        parse_json('{"kind": "loss",\n "kind": "expended"}', "events.jsonl", "events.jsonl", first_line=7)
+    assert str(err.value) == "events.jsonl: line 8: found 'kind', expected each key once in an object"
+    with pytest.raises(InputError, match=r"^events\.jsonl: line 7: found 'Expecting"):
+        parse_json('{"kind": }', "events.jsonl", "events.jsonl", first_line=7)
