@@ -205,8 +205,8 @@ class RobotFile(InputModel):
         for key, span in (("com_x_m", "wheelbase_m"), ("com_y_m", "track_width_m")):
             value, half = getattr(self, key), getattr(self, span) / 2
             if value is not None and not abs(value) < half:
-                where = f"a number within +-{half:g} m (half the {span}: over the wheels)"
-                raise expected(where, found=value, key=key)
+                words = f"a number within +-{half:g} m (half the {span}: over the wheels)"
+                raise expected(words, found=value, key=key)
         if self.wheel_mass_kg * self.n_wheels >= self.mass_kg:
             raise expected(
                 "wheels lighter than the whole robot", found=self.wheel_mass_kg, key="wheel_mass_kg"
