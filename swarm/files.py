@@ -235,15 +235,67 @@ def _unique_keys(pairs: list[tuple[str, object]]) -> dict:
     return seen
 
 
-def read_json(path: str | os.PathLike[str], what: str) -> object:
-    """Read and parse a JSON file with one-line errors: syntax (naming the line), a key given
-    twice in one object, or an unreadable file."""
-    text = read_text(path, what)
+def _duplicate_line(text: str) -> tuple[str, int] | None:
+    """(key, 1-based line) of the first key given twice in one object of the JSON `text`; None if
+    the text nests deeper than this slower scanner can follow.
+
+    Run only once a key is known to repeat: the stdlib's pure-Python scanner, with its object
+    parser wrapped, hands over where each object starts; the object is then walked pair by pair
+    (it parsed, so the walk cannot fail) to find where the key comes again.
+    """
+    decoder = json.JSONDecoder()
+
+    def parse_object(s_and_end, strict, scan_once, object_hook, object_pairs_hook, memo=None):
+        s, start = s_and_end
+        pairs, end = json.decoder.JSONObject(s_and_end, strict, scan_once, None, list, memo)
+        if len({k for k, _ in pairs}) < len(pairs):
+            seen: set[str] = set()
+            i = start
+            for _ in pairs:
+                i = _JSON_SPACE.match(s, i).end()
+                key_at = i
+                key, i = json.decoder.scanstring(s, i + 1, strict)
+                if key in seen:
+                    raise _DuplicateKey(key, s.count("\n", 0, key_at) + 1)
+                seen.add(key)
+                i = _JSON_SPACE.match(s, i).end() + 1  # past the colon
+                i = scan_once(s, _JSON_SPACE.match(s, i).end())[1]
+                i = _JSON_SPACE.match(s, i).end() + 1  # past the comma
+        return dict(pairs), end
+
+    decoder.parse_object = parse_object
+    decoder.scan_once = json.scanner.py_make_scanner(decoder)
+    try:
+        decoder.decode(text)
+    except _DuplicateKey as exc:
+        return exc.key, exc.line
+    except RecursionError:
+        return None
+    return None  # not reached: called only when a key repeats
+
+
+_JSON_SPACE = re.compile(r"[ \t\n\r]*")
+
+
+def parse_json(text: str, source: str | os.PathLike[str], what: str, first_line: int = 1) -> object:
+    """JSON text to Python objects with one-line errors: syntax, or a key given twice in one object
+    (naming the key and its second appearance), each at its line, counted from `first_line` (the
+    text's line in its file: a line of a JSON Lines file)."""
     try:
         return json.loads(text, object_pairs_hook=_unique_keys)
     except json.JSONDecodeError as exc:
-        raise InputError(path, f"line {exc.lineno}", exc.msg, f"valid JSON ({what})") from None
+        at = f"line {exc.lineno + first_line - 1}"
+        raise InputError(source, at, exc.msg, f"valid JSON ({what})") from None
     except _DuplicateKey as exc:
-        raise InputError(path, "(a JSON object)", exc.key, "each key once in an object") from None
+        key, where = exc.key, "(a JSON object)"
+        found = _duplicate_line(text)
+        if found is not None:
+            key, where = found[0], f"line {found[1] + first_line - 1}"
+        raise InputError(source, where, key, "each key once in an object") from None
     except RecursionError:
-        raise InputError(path, "(file)", "nesting too deep", f"valid JSON ({what})") from None
+        raise InputError(source, "(file)", "nesting too deep", f"valid JSON ({what})") from None
+
+
+def read_json(path: str | os.PathLike[str], what: str) -> object:
+    """Read and parse a JSON file (`parse_json`); an unreadable file is an `InputError` too."""
+    return parse_json(read_text(path, what), path, what)

@@ -195,6 +195,56 @@ class PlanFile(_Written):
         return self
 
 
+_Count = Annotated[int, Field(ge=0)]
+
+
+class _PointEntry(_Written):
+    index: int | None = None
+    params: dict[str, Any] = {}
+    runs: _Count
+    successes: _Count = 0
+    success_rate: float
+    wilson_low: float
+    wilson_high: float
+    lost_mean: float | None = None
+    losses_by_cause: dict[str, _Count] = {}
+    losses_by_phase: dict[str, dict[str, _Count]] = {}
+    completed_s: dict[str, float | None] = {}
+    runs_for_width: dict[str, _Count | None] = {}  # None: no runs at the point
+    more_runs_for_width: dict[str, _Count | None] = {}
+
+
+class _Required(_Written):
+    key: str | None = None
+    value: Any = None  # the swept value found (a number, or whatever the swept key takes)
+    note: str | None = None
+    target: float | None = None
+    confidence: float | None = None
+    held: dict[str, Any] = {}
+
+
+class SummaryFile(_Written):
+    """A study's summary.json (`swarm.studies.study.run_study`) as `swarm report` reads it."""
+
+    mission: str | None = None
+    map: str | None = None
+    seed: int | None = None
+    date: str | None = None
+    version: str | None = None
+    backend: str | None = None
+    workers: int | None = None
+    mission_path: str | None = None
+    target: float | None = None
+    confidence: float = Field(0.95, gt=0, lt=1)
+    runs: _Count | None = None
+    runs_per_point: _Count | None = None
+    sweeps: dict[str, list[Any]] = {}
+    required: _Required | None = None
+    losses_by_cause: dict[str, _Count] = {}
+    losses_by_phase: dict[str, dict[str, _Count]] = {}
+    points: list[_PointEntry] = []
+
+
 def plan_from_dict(d: dict, beach_map=None) -> MissionPlan:
     """A `MissionPlan` rebuilt from its JSON (plan.json) for drawing: routes, search tracks and the
     relay graph at plan.json's millimetre precision; no cost map."""
@@ -326,6 +376,7 @@ def report_for(path: str | Path, *, date: str | None = None) -> Report:
         return _guard(folder / "outcome.json", lambda: sim_report(log, date=date))
     if kind == "study":
         summary = read_json(folder / "summary.json", "summary.json")
+        validate(SummaryFile, summary, folder / "summary.json")
         try:
             table = pq.read_table(folder / "results.parquet")
         except (OSError, pa.ArrowException) as exc:

@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from swarm.errors import InputError
-from swarm.files import atomic_path, read_npz, read_text, write_text_atomic
+from swarm.files import atomic_path, read_json, read_npz, write_text_atomic
 from swarm.report.document import Figure, Report, Table, header, jsonable, verdict
 from swarm.report.validation import Poses, errors_png, validation_png
 from swarm.robot.predict import Trajectory
@@ -94,12 +94,7 @@ def read_validation(out_dir: str | Path) -> Validation:
     """The validation `write_validation` wrote into `out_dir`; a damaged file is an `InputError`."""
     out = Path(out_dir)
     path = out / VALIDATION_FILE
-    try:
-        data = json.loads(read_text(path, VALIDATION_FILE))
-    except json.JSONDecodeError as exc:
-        raise InputError(
-            path, f"line {exc.lineno}", exc.msg, "JSON written by swarm model validate"
-        ) from None
+    data = read_json(path, VALIDATION_FILE)
     try:
         meta = data["validation"]
         fields = {f.name for f in dataclasses.fields(Score)}

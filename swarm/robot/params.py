@@ -8,14 +8,15 @@ Dynamics, SAE, 1992, ch. 2 (axle loads under acceleration) and ch. 6 (lateral lo
 
 from __future__ import annotations
 
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 from functools import cached_property
 from pathlib import Path
 
 import numpy as np
+from pydantic import Field, field_validator, model_validator
 
-from swarm.errors import InputError
 from swarm.files import read_yaml
+from swarm.inputs import InputModel, expected, validate
 
 GRAVITY_MPS2 = 9.80665
 
@@ -173,62 +174,53 @@ def parallel_axis(inertia_cm_kgm2: float, mass_kg: float, offset_m: float) -> fl
     return inertia_cm_kgm2 + mass_kg * offset_m**2
 
 
-_FLOAT_KEYS = (
-    "mass_kg",
-    "wheel_mass_kg",
-    "wheel_radius_m",
-    "track_width_m",
-    "wheelbase_m",
-    "length_m",
-    "width_m",
-    "height_m",
-)
+class RobotFile(InputModel):
+    """A robot YAML file as written (swarm/data/robots/skid4.yaml); `RobotParams` is what it means."""
+
+    name: str | None = Field(None, min_length=1, description="Default: the file's stem.")
+    mass_kg: float = Field(gt=0, description="The whole robot, wheels included.")
+    wheel_mass_kg: float = Field(gt=0, description="One wheel.")
+    wheel_radius_m: float = Field(gt=0)
+    track_width_m: float = Field(gt=0, description="Left-right wheel-centre distance (the thesis's d).")
+    wheelbase_m: float = Field(gt=0, description="Front-rear axle distance.")
+    length_m: float = Field(gt=0, description="Body box length a (eq. 2.13).")
+    width_m: float = Field(gt=0, description="Body box width b (eq. 2.13).")
+    height_m: float = Field(gt=0, description="Body box height c (eq. 2.13).")
+    encoder_ticks_per_wheel_rev: int = Field(1960, gt=0)
+    n_wheels: int = 4
+    com_x_m: float | None = None
+    com_y_m: float | None = None
+    com_height_m: float | None = Field(None, gt=0)
+    measured_yaw_inertia_kgm2: float | None = Field(None, gt=0)
+
+    @field_validator("n_wheels")
+    @classmethod
+    def _two_or_four(cls, n: int) -> int:
+        if n not in (2, 4):
+            raise expected("2 or 4", found=n)
+        return n
+
+    @model_validator(mode="after")
+    def _consistent(self) -> RobotFile:
+        for key, span in (("com_x_m", "wheelbase_m"), ("com_y_m", "track_width_m")):
+            value, half = getattr(self, key), getattr(self, span) / 2
+            if value is not None and not abs(value) < half:
+                words = f"a number within +-{half:g} m (half the {span}: over the wheels)"
+                raise expected(words, found=value, key=key)
+        if self.wheel_mass_kg * self.n_wheels >= self.mass_kg:
+            raise expected(
+                "wheels lighter than the whole robot", found=self.wheel_mass_kg, key="wheel_mass_kg"
+            )
+        return self
 
 
 def robot_from_dict(data: object, source: str | Path = "<robot>") -> RobotParams:
-    """Validate a mapping of robot keys (as in robot.yaml) and build `RobotParams`."""
-    if not isinstance(data, dict):
-        raise InputError(source, "(top level)", type(data).__name__, "a mapping of robot keys")
-    known = {f.name for f in fields(RobotParams)} - {"com_stated"}
-    for key in data:
-        if key not in known:
-            raise InputError(source, str(key), key, f"one of {sorted(known)}")
-    values: dict[str, object] = {"name": str(data.get("name", Path(str(source)).stem))}
-    for key in _FLOAT_KEYS:
-        if key not in data:
-            raise InputError(source, key, "nothing", "a positive number")
-        value = data[key]
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or not value > 0:
-            raise InputError(source, key, value, "a positive number")
-        values[key] = float(value)
-    for key in ("encoder_ticks_per_wheel_rev", "n_wheels"):
-        if key in data:
-            value = data[key]
-            if isinstance(value, bool) or not isinstance(value, int) or value <= 0:
-                raise InputError(source, key, value, "a positive integer")
-            values[key] = value
-    for key in ("com_height_m", "measured_yaw_inertia_kgm2"):
-        if key in data:
-            value = data[key]
-            if isinstance(value, bool) or not isinstance(value, (int, float)) or not value > 0:
-                raise InputError(source, key, value, "a positive number")
-            values[key] = float(value)
-    for key, span in (("com_x_m", "wheelbase_m"), ("com_y_m", "track_width_m")):
-        if key in data:
-            value, half = data[key], values[span] / 2  # type: ignore[operator]
-            if isinstance(value, bool) or not isinstance(value, (int, float)) or not abs(value) < half:
-                raise InputError(
-                    source, key, value, f"a number within +-{half:g} m (half the {span}: over the wheels)"
-                )
-            values[key] = float(value)
-    values["com_stated"] = "com_x_m" in data or "com_y_m" in data
-    if values.get("n_wheels", 4) not in (2, 4):
-        raise InputError(source, "n_wheels", values["n_wheels"], "2 or 4")
-    if values["wheel_mass_kg"] * values.get("n_wheels", 4) >= values["mass_kg"]:  # type: ignore[operator]
-        raise InputError(
-            source, "wheel_mass_kg", values["wheel_mass_kg"], "wheels lighter than the whole robot"
-        )
-    return RobotParams(**values)  # type: ignore[arg-type]
+    """Validate a mapping of robot keys (`RobotFile`) and build `RobotParams`."""
+    f = validate(RobotFile, data, source)
+    values = f.model_dump(exclude_none=True)
+    values["name"] = f.name or Path(str(source)).stem
+    values["com_stated"] = f.com_x_m is not None or f.com_y_m is not None
+    return RobotParams(**values)
 
 
 def load_robot(path: str | Path) -> RobotParams:

@@ -9,16 +9,18 @@ so the simulator gathers per-robot coefficient arrays from `TerrainTable` by cel
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from importlib import resources
 from pathlib import Path
+from typing import Annotated, Any
 
 import numpy as np
-import yaml
+from pydantic import AfterValidator, Field, create_model
 
 from swarm.errors import InputError
-from swarm.files import read_yaml
+from swarm.files import parse_yaml, read_yaml
+from swarm.inputs import InputModel, expected, validate
 
 #: The coefficients a mode carries, with what each must be. Order matters: it is the column
 #: order of `TerrainTable` and of calibration vectors.
@@ -173,119 +175,110 @@ MODEL_PARAMS: dict[str, tuple[str, ...]] = {
 }
 
 
-def _check_positive(source: str | Path, where: str, value: object) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0 < value < 1e3:
-        raise InputError(source, where, value, "a number in (0, 1000)")
-    return float(value)
+def _within(words: str, inside: Callable[[float], bool]) -> Any:
+    """A finite float that `inside` admits; anything else is an error expecting `words`."""
+
+    def check(value: float) -> float:
+        if not inside(value):
+            raise expected(words)
+        return value
+
+    return Annotated[float, AfterValidator(check)]
 
 
-def _check_offset(source: str | Path, where: str, value: object) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not abs(value) < 10:
-        raise InputError(source, where, value, "an offset in metres, within +-10")
-    return float(value)
+def _optional_keys(name: str, types: Mapping[str, Any]) -> type[InputModel]:
+    """A model whose keys are all optional. A key given as null is refused (pydantic validates a
+    given value, never the default); `model_fields_set` tells which keys the file gave."""
+    return create_model(name, __base__=InputModel, **{k: (t, None) for k, t in types.items()})
 
 
-def _check_value(source: str | Path, where: str, value: object, name: str) -> float:
-    lo, hi = _BOUNDS[name]
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-        raise InputError(source, where, value, f"a number: {COEFFICIENTS[name]}")
-    if not lo <= value <= hi:
-        raise InputError(source, where, value, f"a number in [{lo}, {hi}]: {COEFFICIENTS[name]}")
-    return float(value)
+_POSITIVE = _within("a number in (0, 1000)", lambda v: 0 < v < 1e3)
+_OFFSET = _within("an offset in metres, within +-10", lambda v: abs(v) < 10)
+#: A mode as a file writes it: every key optional, since a mode inherits what it leaves out.
+ModeSpec = _optional_keys(
+    "ModeSpec",
+    {
+        "description": str,
+        "passable": bool,
+        "like": Annotated[str, Field(min_length=1, description="The mode the other keys come from.")],
+        **{
+            name: _within(
+                f"a number in [{lo:g}, {hi:g}]: {COEFFICIENTS[name]}", lambda v, lo=lo, hi=hi: lo <= v <= hi
+            )
+            for name, (lo, hi) in _BOUNDS.items()
+        },
+        **{
+            model: _optional_keys(
+                f"{model}_params", dict.fromkeys(keys, _OFFSET if model == "skid" else _POSITIVE)
+            )
+            for model, keys in MODEL_PARAMS.items()
+        },
+        "uncertainty": _optional_keys("uncertainty", dict.fromkeys(COEFFICIENTS, _POSITIVE)),
+        "sources": dict[str, str],
+    },
+)
+
+
+class TerrainFile(InputModel):
+    """A terrain YAML file (swarm/data/terrain_modes.yaml, a calibrated swarm/data/terrain/*.yaml)."""
+
+    modes: dict[str, ModeSpec]  # type: ignore[valid-type]
+    #: what `swarm model calibrate` fitted, and how: a record for people, which nothing reads
+    fitted: dict[str, Any] | None = None
+
+
+def _own(spec: InputModel, key: str, inherited: Any) -> Any:
+    """The value the file gave `key`, else the `inherited` one."""
+    return getattr(spec, key) if key in spec.model_fields_set else inherited
+
+
+#: Coefficients a new mode may leave out: the `TerrainMode` defaults (dry land, nominal radius).
+_DEFAULTED = ("turning_resistance_m", "rolling_radius_scale", "buoyancy_fraction", "drag_n_s2_per_m2")
 
 
 def library_from_dict(data: object, source: str | Path, base: TerrainLibrary | None = None) -> TerrainLibrary:
-    """Build modes from `{"modes": {name: {...}}}`.
+    """Build modes from `{"modes": {name: {...}}}` (`TerrainFile`).
 
     A name already in `base` overrides only the keys it gives; a new name takes every coefficient
     from the mode named by its `like:` key (in `base` or earlier in the same file), or must give
     all of them.
     """
-    if not isinstance(data, dict) or not isinstance(data.get("modes"), dict):
-        raise InputError(
-            source,
-            "modes",
-            data if not isinstance(data, dict) else data.get("modes"),
-            "a mapping 'modes:' of terrain-mode names to coefficient mappings",
-        )
-    extra = set(data) - {"modes", "fitted"}
-    if extra:
-        raise InputError(source, sorted(extra)[0], sorted(extra)[0], "only the keys 'modes' (and 'fitted')")
-    allowed = {*COEFFICIENTS, *MODEL_PARAMS, "description", "passable", "sources", "like", "uncertainty"}
+    f = validate(TerrainFile, data, source)
     modes: list[TerrainMode] = []
-    for name, spec in data["modes"].items():
+    for name, spec in f.modes.items():
         where = f"modes.{name}"
-        if not isinstance(spec, dict):
-            raise InputError(source, where, spec, "a mapping of coefficients")
-        for key in spec:
-            if key not in allowed:
-                raise InputError(source, f"{where}.{key}", key, f"one of {sorted(allowed)}")
         parent: TerrainMode | None = None
-        if "like" in spec:
+        if spec.like is not None:
             # a mode defined earlier in this file, else one of the base library
             known = {**(dict(base) if base is not None else {}), **{m.name: m for m in modes}}
-            if not isinstance(spec["like"], str) or spec["like"] not in known:
-                raise InputError(
-                    source, f"{where}.like", spec["like"], f"a known terrain mode {sorted(known)}"
-                )
-            parent = known[spec["like"]]
+            if spec.like not in known:
+                raise InputError(source, f"{where}.like", spec.like, f"a known terrain mode {sorted(known)}")
+            parent = known[spec.like]
         elif base is not None and name in base:
             parent = base[name]
-        values: dict[str, object] = {}
+        values: dict[str, float] = {}
         for coef in COEFFICIENTS:
-            if coef in spec:
-                values[coef] = _check_value(source, f"{where}.{coef}", spec[coef], coef)
-            elif parent is not None:
-                values[coef] = getattr(parent, coef)
-            elif coef in (
-                "turning_resistance_m",
-                "rolling_radius_scale",
-                "buoyancy_fraction",
-                "drag_n_s2_per_m2",
-            ):
-                continue  # dataclass defaults: dry land, nominal radius
-            else:
+            if coef in spec.model_fields_set or parent is not None:
+                values[coef] = float(_own(spec, coef, getattr(parent, coef, None)))
+            elif coef not in _DEFAULTED:
                 raise InputError(
                     source, f"{where}.{coef}", "nothing", f"{COEFFICIENTS[coef]} (or 'like: MODE')"
                 )
-        sources = dict(parent.sources) if parent is not None else {}
-        if "sources" in spec:
-            if not isinstance(spec["sources"], dict):
-                raise InputError(
-                    source, f"{where}.sources", spec["sources"], "a mapping coefficient -> source"
-                )
-            sources.update({str(k): str(v) for k, v in spec["sources"].items()})
-        uncertainty = dict(parent.uncertainty) if parent is not None else {}
-        if "uncertainty" in spec:
-            given = spec["uncertainty"]
-            if not isinstance(given, dict) or any(k not in COEFFICIENTS for k in given):
-                raise InputError(
-                    source, f"{where}.uncertainty", given, f"a mapping with keys from {list(COEFFICIENTS)}"
-                )
-            uncertainty.update(
-                {k: _check_positive(source, f"{where}.uncertainty.{k}", v) for k, v in given.items()}
-            )
-        description = str(spec.get("description", parent.description if parent else ""))
-        passable = spec.get("passable", parent.passable if parent else True)
-        if not isinstance(passable, bool):
-            raise InputError(source, f"{where}.passable", passable, "true or false")
         model_params = {k: dict(v) for k, v in (parent.model_params.items() if parent else [])}
-        for model, keys in MODEL_PARAMS.items():
-            if model not in spec:
-                continue
-            given = spec[model]
-            if not isinstance(given, dict) or any(k not in keys for k in given):
-                raise InputError(source, f"{where}.{model}", given, f"a mapping with keys from {list(keys)}")
-            check = _check_offset if model == "skid" else _check_positive
-            model_params[model] = {k: check(source, f"{where}.{model}.{k}", v) for k, v in given.items()}
+        for model in MODEL_PARAMS:
+            if model in spec.model_fields_set:
+                model_params[model] = getattr(spec, model).model_dump(exclude_unset=True)
         modes.append(
             TerrainMode(
-                name=str(name),
-                description=description,
-                passable=passable,
-                sources=sources,
+                name=name,
+                description=_own(spec, "description", parent.description if parent else ""),
+                passable=_own(spec, "passable", parent.passable if parent else True),
+                sources={**(parent.sources if parent else {}), **(spec.sources or {})},
                 model_params=model_params,
-                uncertainty=uncertainty,
+                uncertainty={
+                    **(parent.uncertainty if parent else {}),
+                    **(spec.uncertainty.model_dump(exclude_unset=True) if spec.uncertainty else {}),
+                },
                 **values,
             )
         )
@@ -295,7 +288,9 @@ def library_from_dict(data: object, source: str | Path, base: TerrainLibrary | N
 def default_library() -> TerrainLibrary:
     """The bundled modes with their literature defaults (swarm/data/terrain_modes.yaml)."""
     ref = resources.files("swarm") / "data" / "terrain_modes.yaml"
-    return library_from_dict(yaml.safe_load(ref.read_text()), "swarm/data/terrain_modes.yaml")
+    return library_from_dict(
+        parse_yaml(ref.read_text(), "swarm/data/terrain_modes.yaml"), "swarm/data/terrain_modes.yaml"
+    )
 
 
 def load_library(path: str | Path | None = None) -> TerrainLibrary:

@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from swarm.errors import InputError
-from swarm.files import read_npz, read_text, write_bytes_atomic, write_text_atomic
+from swarm.files import parse_json, read_npz, read_text, write_bytes_atomic, write_text_atomic
 from swarm.mission.plan import MissionPlan
 from swarm.mission.schema import Mission
 from swarm.sim.env import SimConfig, SwarmEnv
@@ -238,19 +238,13 @@ def _end_reasons(robots: list[str], events: list[dict], alive_at_end: np.ndarray
 def _read_json_lines(path: Path, whole: bool = False) -> list:
     """A JSON file as one value (`whole`), else JSON Lines as a list; bad JSON is an `InputError`."""
     text = read_text(path, path.name)
-    lines = [text] if whole else text.splitlines()
-    out = []
-    for number, line in enumerate(lines, 1):
-        if not line.strip():
-            continue
-        try:
-            out.append(json.loads(line))
-        except json.JSONDecodeError as exc:
-            at = f"line {exc.lineno if whole else number}"
-            raise InputError(path, at, exc.msg, "JSON written by swarm simulate") from None
-    if whole and not out:
-        raise InputError(path, "(file)", "nothing", "JSON written by swarm simulate")
-    return out
+    if whole:
+        if not text.strip():
+            raise InputError(path, "(file)", "nothing", "JSON written by swarm simulate")
+        return [parse_json(text, path, path.name)]
+    return [
+        parse_json(line, path, path.name, n) for n, line in enumerate(text.splitlines(), 1) if line.strip()
+    ]
 
 
 def read_log(out_dir: str | Path, plan: MissionPlan | None = None) -> MissionLog:

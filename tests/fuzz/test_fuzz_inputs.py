@@ -47,6 +47,7 @@ EXAMPLES = {
     "robot run": 300,
     "study.json": 200,
     "plan.json": 200,
+    "summary.json": 200,
 }
 
 
@@ -305,3 +306,54 @@ def test_plan_json(plan_json: Path, data) -> None:
     original = (plan_json.parent.parent / "plan.json.orig").read_text()
     plan_json.write_bytes(data.draw(mutated_text(original, dump=json.dumps), label="file"))
     only_our_error(read_plan, plan_json.parent)
+
+
+@pytest.fixture(scope="module")
+def summary_json(work: Path) -> Path:
+    """A study folder: summary.json as `run_study` writes it, from `summarize` over a small results
+    table made here (two points of three runs and one point never run, whose rates are NaN and
+    whose run counts are null), beside that table as results.parquet."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    from swarm.studies.study import StudySpec, summarize
+    from swarm.studies.sweep import parse_sweeps
+
+    spec = StudySpec(
+        str(REPO / "missions" / "landing.yaml"), 3, parse_sweeps(["swarm.count=8,10,12"]), seed=4
+    )
+    loss = {"cause": "surf_timeout", "phase": "surf_crossing", "t_s": 100.5, "x_m": 39.0, "y_m": 14.7}
+    table = pa.table(
+        {
+            "point": pa.array([0, 0, 0, 1, 1, 1], pa.int32()),
+            "run": pa.array([0, 1, 2, 0, 1, 2], pa.int32()),
+            "swarm.count": [8, 8, 8, 10, 10, 10],
+            "success": [False, True, False, True, True, True],
+            "losses": [[loss, {**loss, "cause": "failure", "phase": "beach"}], [], [loss], [], [loss], []],
+            "completed_s": [None, 310.5, None, 280.0, 295.5, 301.0],
+        }
+    )
+    summary = summarize(spec, table) | {
+        "backend": "local",
+        "workers": 1,
+        "map": "test_small",
+        "date": "2026-01-02",
+    }
+    folder = work / "study-summary"
+    folder.mkdir()
+    pq.write_table(table, folder / "results.parquet")
+    path = folder / "summary.json"
+    path.write_text(json.dumps(summary, indent=1, sort_keys=True) + "\n")
+    return path
+
+
+@fuzz("summary.json")
+@given(data=st.data())
+def test_summary_json(summary_json: Path, data) -> None:
+    """`swarm report` on a study folder: reading summary.json and building the report's tables."""
+    from swarm.report.load import report_for
+
+    original = getattr(test_summary_json, "original", None) or summary_json.read_text()
+    test_summary_json.original = original  # type: ignore[attr-defined]
+    summary_json.write_bytes(data.draw(mutated_text(original, dump=json.dumps), label="file"))
+    only_our_error(lambda p: report_for(p.parent).markdown(), summary_json)

@@ -175,9 +175,9 @@ def test_robot_yaml_reads_the_centre_of_mass_and_inertia_keys() -> None:
     [
         ("com_x_m", 0.2, "within +-0.15 m"),
         ("com_y_m", -0.31, "within +-0.3 m"),
-        ("com_x_m", "behind", "within"),
-        ("com_height_m", 0, "a positive number"),
-        ("measured_yaw_inertia_kgm2", -1.0, "a positive number"),
+        ("com_x_m", "behind", "a number in metres"),
+        ("com_height_m", 0, "a number in metres > 0"),
+        ("measured_yaw_inertia_kgm2", -1.0, "a number in kg m^2 > 0"),
     ],
 )
 def test_robot_yaml_refuses_a_centre_of_mass_off_the_wheels(key: str, value: object, expected: str) -> None:
