@@ -39,7 +39,12 @@ the pass could find it, though any real sensor sees it coming: so a pass is deci
 draw made) as soon as the robot comes within `DECIDE_TRIGGER_RADII` trigger radii of the mine,
 with x the lesser of the closest approach so far and the closest approach of the straight line
 the robot is on. For a straight pass that is its closest approach exactly, so the lateral-range
-curve is unchanged; the robot is then told in time to steer clear. A decided pass draws no more.
+curve is unchanged; the robot is then told in time to steer clear. A decided pass draws again
+only when the robot comes closer than the x it was drawn at (a robot curving onto a mine it
+passed undetected), with the part of p its earlier draws did not cover (`closer_look`), and at
+its end if its closest approach beat that x: a pass still detects with p at its least x, and a
+robot does not run undetected onto a mine it is plainly closing on (full_conops set off 0.27 mines
+a run that way).
 
 A pass also ends, without a draw, when the mine stops being a target (set off, cleared, or found by
 another robot: a found mine is known to all and nobody searches for it again), and when the robot
@@ -168,7 +173,7 @@ class MineSensor:
         self._tree = cKDTree(minefield.positions_m) if self._m else None
         self._keys = np.empty(0, dtype=np.int64)  # robot * m + mine, sorted
         self._xmin = np.empty(0)  # closest approach so far, metres
-        self._decided = np.empty(0, dtype=bool)  # drawn for already (early decision)
+        self._xdrawn = np.empty(0)  # the x a pass was last drawn at (inf: not yet; early decision)
         #: A pass is decided once its robot comes this close to the mine (module docstring).
         self.decide_m = min(self.range_m, DECIDE_TRIGGER_RADII * minefield.trigger_radius_m)
         self._last_xy = np.full((self.n, 2), np.nan)  # position at the last step while sensing
@@ -182,7 +187,7 @@ class MineSensor:
         """Forget passes in progress (a new episode)."""
         self._keys = np.empty(0, dtype=np.int64)
         self._xmin = np.empty(0)
-        self._decided = np.empty(0, dtype=bool)
+        self._xdrawn = np.empty(0)
         self._last_xy[:] = np.nan
         self._screen_signature = -1
 
@@ -335,40 +340,54 @@ class MineSensor:
             keys, dist, now_m, ray_m = keys[order], dist[order], now_m[order], ray_m[order]
 
         # merge with the passes in progress
-        old_keys, old_x, old_decided = self._keys, self._xmin, self._decided
-        decided = np.zeros(len(keys), dtype=bool)
+        old_keys, old_x, old_drawn = self._keys, self._xmin, self._xdrawn
+        drawn = np.full(len(keys), np.inf)
         if len(old_keys) and len(keys):
             where = np.minimum(np.searchsorted(old_keys, keys), len(old_keys) - 1)
             going_on = old_keys[where] == keys
             dist[going_on] = np.minimum(dist[going_on], old_x[where[going_on]])
-            decided[going_on] = old_decided[where[going_on]]
+            drawn[going_on] = old_drawn[where[going_on]]
             ended = np.ones(len(old_keys), dtype=bool)
             ended[where[going_on]] = False
         else:
             ended = np.ones(len(old_keys), dtype=bool)
 
-        # passes that ended undecided: one draw each, if the mine is still a target and the robot
-        # can report; then passes decided early (module docstring, "Early decision")
-        ended &= ~old_decided
-        end_keys, end_x = old_keys[ended], old_x[ended]
-        early = ~decided & (now_m <= self.decide_m) & can_report[keys // m]
-        early_x = np.minimum(dist[early], ray_m[early])
-        decided |= early
-        self._keys, self._xmin, self._decided = keys, dist, decided
+        # passes that ended closer than they were drawn at (never drawn: at infinity), and passes
+        # within the decision distance that are now closer than that (module docstring, "Early
+        # decision"): each draws for the part of p(x) its earlier draws did not cover
+        ended &= old_x < old_drawn
+        end_keys, end_x, end_before = old_keys[ended], old_x[ended], old_drawn[ended]
+        # first drawn at the closest approach the robot's line promises; later only as it gets closer
+        x_now = np.where(np.isfinite(drawn), dist, np.minimum(dist, ray_m))
+        early = (now_m <= self.decide_m) & can_report[keys // m] & (x_now < drawn)
+        early_x, early_before = x_now[early], drawn[early]
+        drawn[early] = early_x
+        self._keys, self._xmin, self._xdrawn = keys, dist, drawn
         draw_keys = np.concatenate([end_keys, keys[early]])
         draw_x = np.concatenate([end_x, early_x])
+        before = np.concatenate([end_before, early_before])
         robot, mine = draw_keys // m, draw_keys % m
         draws = target[mine] & can_report[robot]
-        robot, mine, draw_x = robot[draws], mine[draws], draw_x[draws]
+        robot, mine, draw_x, before = robot[draws], mine[draws], draw_x[draws], before[draws]
         if not len(robot):
             return []
-        hit = rng.random(len(robot)) < self.curve(draw_x)
+        hit = rng.random(len(robot)) < self.closer_look(draw_x, before)
         robot, mine = robot[hit], mine[hit]
         found = self._found(robot, mine, t_s)
         if len(self._keys):  # nobody keeps passing a mine that is now known
             keep = ~field.detected[self._keys % m]
-            self._keys, self._xmin, self._decided = self._keys[keep], self._xmin[keep], self._decided[keep]
+            self._keys, self._xmin, self._xdrawn = self._keys[keep], self._xmin[keep], self._xdrawn[keep]
         return found
+
+    def closer_look(self, x: np.ndarray, before: np.ndarray) -> np.ndarray:
+        """Chance that a pass already drawn at `before` without a find finds the mine at the closer
+        x: (p(x) - p(before)) / (1 - p(before)), p(x) itself when never drawn (`before` inf). Draws
+        at x1 > x2 > ... then miss with prod (1 - p(x_k+1)) / (1 - p(x_k)) = 1 - p(x_last): the pass
+        detects with p at its least x, however often it is looked at."""
+        p = self.curve(x)
+        p0 = np.where(np.isfinite(before), self.curve(np.where(np.isfinite(before), before, 0.0)), 0.0)
+        left = 1.0 - p0
+        return np.where(left > 0, (p - p0) / np.where(left > 0, left, 1.0), 0.0)
 
     def _false_alarms(
         self,

@@ -313,6 +313,39 @@ def test_early_decision_keeps_the_lateral_range_curve() -> None:
         assert _binomial_ok(hits, per_offset, float(p[k])), (offsets[k], hits, p[k])
 
 
+def test_a_robot_that_turns_onto_a_mine_it_passed_gets_the_closer_look() -> None:
+    """A robot passes its mine 0.8 m off (the pass is decided there), then turns and drives at it,
+    stopping 5 cm short. The pass detects with p at its least distance, not with the p of the
+    line it was decided on: a decided pass that drew no more let full_conops's robots curve onto
+    mines they had passed undetected and set them off."""
+    n = 1000
+    lanes = np.arange(n) * 20.0
+    field = MineField(np.column_stack([np.zeros(n), lanes]))
+    ms = MineSensor(TABLE, field, n)
+    rng = np.random.default_rng(5)
+    path = [(-5.0 + 0.25 * k, 0.8) for k in range(21)] + [(0.0, 0.8 - 0.15 * k) for k in range(1, 6)]
+    for step, (x, y) in enumerate(path):
+        xy = np.column_stack([np.full(n, x), lanes + y])
+        ms.update(xy, np.ones(n, bool), np.full(n, 0.25), float(step), rng)
+    closest = 0.8 - 0.15 * 5
+    hits = int(field.detected.sum())
+    p_closest, p_line = lateral_range_curve(TABLE)(np.array([closest, 0.8]))
+    assert _binomial_ok(hits, n, float(p_closest)), (hits, p_closest, p_line)
+
+
+def test_closer_looks_miss_as_one_look_at_the_least_distance() -> None:
+    """Draws at x1 > x2 > ... with `closer_look` miss with prod (1 - q_k) = 1 - p(x_last):
+    checked against the curve for random decreasing sequences."""
+    ms = MineSensor(TABLE, MineField(np.zeros((1, 2))), 1)
+    p = lateral_range_curve(TABLE)
+    rng = np.random.default_rng(2)
+    for _ in range(50):
+        xs = np.sort(rng.uniform(0.0, 5.0, rng.integers(1, 6)))[::-1]
+        before = np.concatenate([[np.inf], xs[:-1]])
+        miss = np.prod(1.0 - ms.closer_look(xs, before))
+        assert miss == pytest.approx(1.0 - float(p(xs[-1])), abs=1e-12)
+
+
 def test_same_inputs_and_seed_give_the_same_detections() -> None:
     sensor = Sensor(model="inverse_cube", sweep_width_m=2.0, false_alarms_per_km=20.0)
 
