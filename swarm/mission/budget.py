@@ -14,7 +14,8 @@ rates the simulator draws from (`swarm.sim.hazards`):
 - rock: damage_per_km per metre on rock;
 - mine: mines met per metre (density x twice the trigger radius) x the chance the sensor has not
   found the mine before the robot reaches it (inverse cube: exp(-W^2 / (16 pi r^2)) for a mine
-  dead ahead) x trigger_probability;
+  dead ahead; a tabulated curve: 1 - p averaged over offsets within the trigger radius) x
+  trigger_probability;
 - radio dropout: 1 - exp(-rate x t).
 
 Causes combine as independent competing risks: P(lost) = 1 - prod(1 - p_cause).
@@ -155,7 +156,13 @@ def undetected_at_contact(mission: Mission) -> float:
         return 1.0
     sensor = search[0].sensor
     r = 0.25  # the simulator's trigger radius (swarm.sim.mines.DEFAULT_TRIGGER_RADIUS_M)
-    if sensor.model == "inverse_cube" and sensor.lateral_range is None:
+    if sensor.lateral_range is not None:
+        # a pass that closes on a mine draws down to its least distance (`swarm.sim.sensing`), an
+        # offset uniform over the trigger radius for a mine the robot meets
+        x = np.linspace(0.0, r, 65)
+        lr = sensor.lateral_range
+        return float(1.0 - np.interp(x, lr.range_m, lr.probability, right=0.0).mean())
+    if sensor.model == "inverse_cube":
         return math.exp(-(sensor.width_m**2) / (16.0 * math.pi * r * r))
     return 0.0 if sensor.width_m / 2.0 > r else 1.0
 

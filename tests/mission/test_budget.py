@@ -64,6 +64,17 @@ def test_a_mine_met_undetected_is_rare_with_an_inverse_cube_sensor(mission) -> N
     )
 
 
+def test_a_mine_met_undetected_with_a_tabulated_curve_misses_by_the_curve_near_zero() -> None:
+    """A robot closing on a mine draws down to its least distance, an offset within the trigger
+    radius r = 0.25 m: missed with 1 - p averaged over [0, r]. For p = 0.9 - 0.1 x near zero
+    that is 1 - (0.9 - 0.1 r / 2)."""
+    curve = {"range_m": [0.0, 1.0, 2.0], "probability": [0.9, 0.8, 0.0]}
+    m = load_mission(
+        MINE_CLEAR, {"tasks.0.sensor.lateral_range": curve, "tasks.0.sensor.sweep_width_m": None}
+    )
+    assert budget.undetected_at_contact(m) == pytest.approx(1.0 - (0.9 - 0.1 * 0.25 / 2), rel=1e-3)
+
+
 @pytest.mark.parametrize("mines", [10, 20, 200])
 def test_the_detection_a_criterion_needs_is_the_binomial_quantile(mines) -> None:
     p = budget.detection_needed(0.85, mines, confidence=0.95)
