@@ -35,9 +35,9 @@ this model, 3 runs within 1.5%: Wong's patch-integrated stress, mu N [1 - (k/s)(
 31.1% and 2 runs (wide arcs then resist with half of Steeds' turning resistance on concrete,
 `tests/robot/test_turning.py`); the normality rule of the limit surface, force along
 (mu_x^2 s_x, mu_y^2 s_y, tau^2 r), 37.5% and 3 runs. What the turning misses on those engines
-is theirs: Bullet clamps each friction direction and the spin on its own (a friction pyramid,
-not a cone), and MuJoCo's rolling friction is a wheel torque where this model's c_rr N opposes
-the hub's travel, as a pivot's rolling resistance does in Kozlowski & Pazderski (2004).)
+traces to them (README, Accuracy): MuJoCo's rolling friction is a wheel torque where this model's
+c_rr N opposes the hub's travel, as a pivot's rolling resistance does in Kozlowski & Pazderski
+(AMCS 14(4), 2004), and Bullet's yaw lags and overshoots its commands.)
 
 Rolling resistance c_rr N opposes each contact's rolling. Water carries part of the weight
 (`buoyancy_fraction`) and drags the hull quadratically. An external body-frame wrench (Fx, Fy,
