@@ -39,9 +39,9 @@ from run_files import RATE_HZ, write_run  # noqa: E402
 
 from swarm.robot.patterns import spiral, square, square_spiral_line, straight  # noqa: E402
 
-#: Effective track the patterns steer with: the Husky's pivots turn ~1/4 of what its geometric
-#: track predicts on concrete, its car turns about 1/2 (measured once in this engine).
-PATTERN_TRACK_M = 1.4
+#: Effective track the patterns steer with: the Husky in Bullet turns far less than its 0.57 m
+#: track predicts, and 2.6 m brings the square's corners near 80 degrees (1.4 m gave 45).
+PATTERN_TRACK_M = 2.6
 #: Pattern name -> (commands, initial heading in degrees), as the sample runs start.
 PATTERNS = {
     "straight": (lambda: straight(wheel_radius_m=WHEEL_RADIUS, dt_s=1 / RATE_HZ), 136.0),

@@ -28,7 +28,16 @@ thus varies with the motion, as Rabiee & Biswas (ICRA 2019) found it does.
 (Tried for issue 14 and not kept: a bore torque on its own budget, added to the lateral forces'
 moment as the classical moment balance adds its turning-resistance moment. It matched MuJoCo's
 torsional friction better on hard ground, but calibrated on a square it predicted MuJoCo's soft-
-sand square-spiral-line with 6.1% path RMSE against the shared ellipsoid's 1.9%.)
+sand square-spiral-line with 6.1% path RMSE against the shared ellipsoid's 1.9%. Also tried for
+the turning and not kept, each calibrated on the square and scored on the 12 held-out spirals and
+square-spiral-lines of both reference engines (`bench_heldout.py`), path RMSE summed 32.2% with
+this model, 3 runs within 1.5%: Wong's patch-integrated stress, mu N [1 - (k/s)(1 - exp(-s/k))],
+31.1% and 2 runs (wide arcs then resist with half of Steeds' turning resistance on concrete,
+`tests/robot/test_turning.py`); the normality rule of the limit surface, force along
+(mu_x^2 s_x, mu_y^2 s_y, tau^2 r), 37.5% and 3 runs. What the turning misses on those engines
+traces to them (README, Accuracy): MuJoCo's rolling friction is a wheel torque where this model's
+c_rr N opposes the hub's travel, as a pivot's rolling resistance does in Kozlowski & Pazderski
+(AMCS 14(4), 2004), and Bullet's yaw lags and overshoots its commands.)
 
 Rolling resistance c_rr N opposes each contact's rolling. Water carries part of the weight
 (`buoyancy_fraction`) and drags the hull quadratically. An external body-frame wrench (Fx, Fy,
