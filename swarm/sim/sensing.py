@@ -42,9 +42,9 @@ the robot is on. For a straight pass that is its closest approach exactly, so th
 curve is unchanged; the robot is then told in time to steer clear. A decided pass draws again
 only when the robot comes closer than the x it was drawn at (a robot curving onto a mine it
 passed undetected), with the part of p its earlier draws did not cover (`closer_look`), and at
-its end if its closest approach beat that x: a pass still detects with p at its least x, and a
-robot does not run undetected onto a mine it is plainly closing on (full_conops set off 0.27 mines
-a run that way).
+its end if its closest approach beat that x: a pass still detects with p at its least x (as the
+planner's `swarm.planning.detection` counts it), and a robot does not run undetected onto a mine
+it is plainly closing on.
 
 A pass also ends, without a draw, when the mine stops being a target (set off, cleared, or found by
 another robot: a found mine is known to all and nobody searches for it again), and when the robot
