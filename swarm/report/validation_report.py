@@ -97,17 +97,18 @@ def read_validation(out_dir: str | Path) -> Validation:
     data = read_json(path, VALIDATION_FILE)
     try:
         meta = data["validation"]
+        arrays_name = meta.get("arrays", ARRAYS_FILE)
         fields = {f.name for f in dataclasses.fields(Score)}
         scores = [data, *data.get("compare", [])]
         by_model = {s["model"]: Score(**{k: s[k] for k in fields}) for s in scores}
-    except (KeyError, TypeError) as exc:
+    except (KeyError, TypeError, AttributeError) as exc:
         raise InputError(
             path,
             "(contents)",
             f"{type(exc).__name__}: {exc}",
             "a validation.json from swarm model validate --out",
         ) from None
-    arrays_path = out / meta.get("arrays", ARRAYS_FILE)
+    arrays_path = out / arrays_name
     try:
         a = read_npz(arrays_path, "the arrays swarm model validate --out wrote")
         truth = Trajectory(*(a[f"truth_{k}"] for k in POSE_KEYS))

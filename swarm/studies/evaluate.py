@@ -101,11 +101,3 @@ def evaluate_plan(
         result["suggested_count"] = min(met) if met else None
     write_text_atomic(Path(out) / EVALUATION_FILE, json.dumps(result, indent=1, sort_keys=True) + "\n")
     return result
-
-
-def read_evaluation(folder: str | Path) -> dict | None:
-    """The evaluation written beside a plan, or None."""
-    path = Path(folder) / EVALUATION_FILE
-    if not path.is_file():
-        return None
-    return json.loads(path.read_text(encoding="utf-8"))

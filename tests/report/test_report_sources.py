@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from swarm.errors import InputError
 from swarm.mission import mission_from_dict
 from swarm.mission.plan import plan_json, plan_mission, write_plan
 from swarm.planning.radio import comm_range_m, link_margin_db
@@ -196,3 +197,15 @@ def test_validation_files_round_trip(tmp_path):
     assert build_report(tmp_path, date="2025-01-02").json() == (
         build_report(tmp_path / "validation.json", date="2025-01-02").json()
     )
+
+
+@pytest.mark.parametrize("meta", [5, "x", [1, 2], None])
+def test_a_validation_json_whose_validation_key_is_not_a_mapping_is_one_line(tmp_path, meta):
+    """Found by review of the fuzzed kinds: `validation: 5` was an AttributeError traceback."""
+    write_validation(tmp_path, _validation(0.2))
+    data = json.loads((tmp_path / "validation.json").read_text())
+    data["validation"] = meta
+    (tmp_path / "validation.json").write_text(json.dumps(data))
+    one_line = r"validation\.json: \(contents\): found \"(AttributeError|TypeError)"
+    with pytest.raises(InputError, match=one_line):
+        read_validation(tmp_path)
