@@ -11,6 +11,7 @@ import os
 import re
 import secrets
 import sys
+import tokenize
 import zipfile
 import zlib
 from collections.abc import Iterator
@@ -167,6 +168,8 @@ def read_npz(path: str | os.PathLike[str], expected: str) -> dict[str, object]:
         zlib.error,
         NotImplementedError,  # a header naming a compression method zipfile does not have
         RuntimeError,  # a header flagging the member as encrypted
+        SyntaxError,  # an .npy header numpy cannot parse (numpy tokenizes it as Python)
+        tokenize.TokenError,
     ) as exc:
         first = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
         raise InputError(path, "(file)", f"a damaged archive ({first[:100]})", expected) from None

@@ -245,6 +245,42 @@ class SummaryFile(_Written):
     points: list[_PointEntry] = []
 
 
+class _Distribution(_Written):
+    mean: float | None = None
+    median: float | None = None
+    min: float | None = None
+    max: float | None = None
+
+
+class _QuickSize(_Written):
+    count: int
+    runs: _Count
+    success_rate: float
+    wilson_low: float
+    wilson_high: float
+
+
+class EvaluationFile(_Written):
+    """A plan's evaluation.json (`swarm.studies.evaluate.evaluate_plan`) as `swarm report` reads it."""
+
+    runs: _Count
+    successes: _Count
+    success_rate: float
+    wilson_low: float
+    wilson_high: float
+    target: float
+    confidence: float = Field(gt=0, lt=1)
+    detection: _Distribution | None = None
+    detection_values: list[float] = []
+    lost: _Distribution
+    lost_values: list[float] = []
+    losses_by_cause: dict[str, _Count] = {}
+    losses_by_phase: dict[str, dict[str, _Count]] = {}
+    sizes: list[_QuickSize] = []
+    runs_needed: _Count | None = None
+    suggested_count: int | None = None
+
+
 def plan_from_dict(d: dict, beach_map=None) -> MissionPlan:
     """A `MissionPlan` rebuilt from its JSON (plan.json) for drawing: routes, search tracks and the
     relay graph at plan.json's millimetre precision; no cost map."""
@@ -367,6 +403,8 @@ def report_for(path: str | Path, *, date: str | None = None) -> Report:
         plan, d = read_plan(folder)
         ev_path = folder / EVALUATION_FILE
         evaluation = read_json(ev_path, EVALUATION_FILE) if ev_path.is_file() else None
+        if evaluation is not None:
+            validate(EvaluationFile, evaluation, ev_path)
         return _guard(
             folder / PLAN_FILE, lambda: plan_report(plan, date=date, plan_dict=d, evaluation=evaluation)
         )

@@ -411,7 +411,11 @@ def plan_report(
         checks = [
             *data["verdict"].get("checks", []),
             {
-                "criterion": f"P(success) in simulation ({evaluation['runs']} runs)",
+                "criterion": (
+                    f"P(success) in simulation ({evaluation['runs']} runs; "
+                    f"{evaluation['confidence']:.0%} Wilson interval {evaluation['wilson_low']:.2f}"
+                    f" to {evaluation['wilson_high']:.2f})"
+                ),
                 "value": evaluation["success_rate"],
                 "target": evaluation["target"],
                 "unit": "fraction",

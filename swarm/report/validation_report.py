@@ -20,9 +20,11 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+from pydantic import BaseModel, ConfigDict, Field
 
 from swarm.errors import InputError
 from swarm.files import atomic_path, read_json, read_npz, write_text_atomic
+from swarm.inputs import validate
 from swarm.report.document import Figure, Report, Table, header, jsonable, verdict
 from swarm.report.validation import Poses, errors_png, validation_png
 from swarm.robot.predict import Trajectory
@@ -33,6 +35,45 @@ ARRAYS_FILE = "validation.npz"
 #: Path RMSE must stay under this percentage of the distance travelled.
 TARGET_RMSE_PCT = 3.0
 POSE_KEYS = ("t_s", "x_m", "y_m", "heading_rad")
+
+
+class _ScoreEntry(BaseModel):
+    """One model's score as validation.json keeps it (`Score.as_dict`)."""
+
+    model_config = ConfigDict(extra="ignore", strict=True, frozen=True)
+
+    model: str
+    run: str
+    terrain: str
+    distance_m: float
+    duration_s: float
+    final_error_m: float
+    path_rmse_m: float
+    path_rmse_pct: float
+    max_error_m: float
+    heading_rmse_deg: float
+    final_heading_error_deg: float
+
+
+class _ValidationMeta(BaseModel):
+    model_config = ConfigDict(extra="ignore", strict=True, frozen=True)
+
+    run: str
+    distance_m: float
+    model: str
+    models: list[str] = Field(min_length=1)
+    terrain: str
+    robot: str | None = None
+    target_rmse_pct: float = Field(TARGET_RMSE_PCT, gt=0)
+    arrays: str = Field(ARRAYS_FILE, pattern=r"^[^/\\]+$")
+
+
+class ValidationFile(_ScoreEntry):
+    """validation.json (`Validation.as_json`) as `swarm report` reads it: the chosen model's score,
+    the others' under "compare", and what the report needs under "validation"."""
+
+    compare: list[_ScoreEntry] = Field(default_factory=list)
+    validation: _ValidationMeta
 
 
 @dataclass
@@ -95,39 +136,31 @@ def read_validation(out_dir: str | Path) -> Validation:
     out = Path(out_dir)
     path = out / VALIDATION_FILE
     data = read_json(path, VALIDATION_FILE)
-    try:
-        meta = data["validation"]
-        arrays_name = meta.get("arrays", ARRAYS_FILE)
-        fields = {f.name for f in dataclasses.fields(Score)}
-        scores = [data, *data.get("compare", [])]
-        by_model = {s["model"]: Score(**{k: s[k] for k in fields}) for s in scores}
-    except (KeyError, TypeError, AttributeError) as exc:
-        raise InputError(
-            path,
-            "(contents)",
-            f"{type(exc).__name__}: {exc}",
-            "a validation.json from swarm model validate --out",
-        ) from None
-    arrays_path = out / arrays_name
+    file = validate(ValidationFile, data, path)
+    meta = file.validation
+    fields = [f.name for f in dataclasses.fields(Score)]
+    scores = [file, *file.compare]
+    by_model = {s.model: Score(**{k: getattr(s, k) for k in fields}) for s in scores}
+    arrays_path = out / meta.arrays
     try:
         a = read_npz(arrays_path, "the arrays swarm model validate --out wrote")
         truth = Trajectory(*(a[f"truth_{k}"] for k in POSE_KEYS))
-        trajectories = {m: Trajectory(*(a[f"{m}_{k}"] for k in POSE_KEYS)) for m in meta["models"]}
+        trajectories = {m: Trajectory(*(a[f"{m}_{k}"] for k in POSE_KEYS)) for m in meta.models}
     except (ValueError, KeyError) as exc:
         found = f"{type(exc).__name__}: {exc}"
         raise InputError(
             arrays_path, "(contents)", found, "the arrays swarm model validate --out wrote"
         ) from None
     return Validation(
-        run=str(meta["run"]),
-        distance_m=float(meta["distance_m"]),
+        run=meta.run,
+        distance_m=meta.distance_m,
         truth=truth,
         trajectories=trajectories,
-        scores={m: by_model[m] for m in meta["models"] if m in by_model},
-        model=str(meta["model"]),
-        terrain=str(meta["terrain"]),
-        robot=meta.get("robot"),
-        target_pct=float(meta.get("target_rmse_pct", TARGET_RMSE_PCT)),
+        scores={m: by_model[m] for m in meta.models if m in by_model},
+        model=meta.model,
+        terrain=meta.terrain,
+        robot=meta.robot,
+        target_pct=meta.target_rmse_pct,
     )
 
 

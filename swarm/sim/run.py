@@ -21,11 +21,14 @@ from collections import Counter
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Literal
 
 import numpy as np
+from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 from swarm.errors import InputError
 from swarm.files import parse_json, read_npz, read_text, write_bytes_atomic, write_text_atomic
+from swarm.inputs import expected, validate
 from swarm.mission.plan import MissionPlan
 from swarm.mission.schema import Mission
 from swarm.sim.env import SimConfig, SwarmEnv
@@ -33,9 +36,56 @@ from swarm.sim.layout import PHASES, ROLES
 from swarm.sim.memory import RECORD_EVERY_S, check_fits
 from swarm.sim.policy import ScriptedPolicy
 
-#: Seconds between trajectory samples in the log.
 #: The log's format version, written into outcome.json.
 LOG_VERSION = 1
+
+
+class _Criterion(BaseModel):
+    model_config = ConfigDict(extra="ignore", strict=True, frozen=True)
+
+    value: float
+    target: float
+    met: bool
+
+
+class OutcomeFile(BaseModel):
+    """outcome.json (`MissionLog.summary` plus the mines' states) as `read_log` reads it back."""
+
+    model_config = ConfigDict(extra="ignore", strict=True, frozen=True)
+
+    mission: str
+    map: str
+    seed: int
+    success: bool
+    criteria: dict[str, _Criterion]
+    completed_s: float | None = None
+    mines_state: dict[Literal["detected", "marked", "exploded", "cleared"], list[bool]] = Field(
+        default_factory=dict
+    )
+
+
+class LogEvent(BaseModel):
+    """One line of events.jsonl as `read_log` reads it back: the keys every kind shares, typed
+    (each kind's own data rides along unchecked); a loss names its robot, cause, phase and place."""
+
+    model_config = ConfigDict(extra="allow", strict=True, frozen=True)
+
+    kind: str
+    t_s: float = Field(allow_inf_nan=False)
+    robot: str | None = None
+    phase: str | None = None
+    cause: str | None = None
+    x_m: float | None = None
+    y_m: float | None = None
+
+    @model_validator(mode="after")
+    def _complete(self) -> LogEvent:
+        need = {"loss": ("robot", "cause", "phase", "x_m", "y_m"), "phase": ("phase",)}.get(self.kind, ())
+        for key in need:
+            if getattr(self, key) is None:
+                raise expected(f"a {self.kind} event with its {key}", found=None, key=key)
+        return self
+
 
 Progress = Callable[[float, float], None]
 
@@ -257,7 +307,10 @@ def read_log(out_dir: str | Path, plan: MissionPlan | None = None) -> MissionLog
                 out, name, "no such file", f"a simulation log folder with {', '.join(LOG_FILES)}"
             )
     summary = _read_json_lines(out / "outcome.json", whole=True)[0]
+    validate(OutcomeFile, summary, out / "outcome.json")
     events = _read_json_lines(out / "events.jsonl")
+    for n, event in enumerate(events, 1):
+        validate(LogEvent, event, f"{out / 'events.jsonl'}: event {n}")
     where = out / "trajectories.npz"
     try:
         arrays = read_npz(where, "the trajectories swarm simulate wrote")

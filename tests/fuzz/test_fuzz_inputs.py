@@ -48,6 +48,9 @@ EXAMPLES = {
     "study.json": 200,
     "plan.json": 200,
     "summary.json": 200,
+    "simulation log": 200,
+    "evaluation.json": 200,
+    "validation.json": 200,
 }
 
 
@@ -357,3 +360,114 @@ def test_summary_json(summary_json: Path, data) -> None:
     test_summary_json.original = original  # type: ignore[attr-defined]
     summary_json.write_bytes(data.draw(mutated_text(original, dump=json.dumps), label="file"))
     only_our_error(lambda p: report_for(p.parent).markdown(), summary_json)
+
+
+# --- result folders swarm report reads: a simulation's log, a plan's evaluation, a validation --------
+
+
+def _copy_folder(src: Path, dst: Path) -> Path:
+    if dst.exists():
+        shutil.rmtree(dst)
+    shutil.copytree(src, dst)
+    return dst
+
+
+@pytest.fixture(scope="module")
+def sim_folder(work: Path) -> Path:
+    """A simulation folder as `swarm simulate` writes it: a short landing run (seconds)."""
+    from swarm.mission import load_mission
+    from swarm.mission.plan import plan_mission, write_plan
+    from swarm.sim.run import simulate, write_log
+
+    mission = load_mission(REPO / "missions" / "landing.yaml", {"phases.beach_operations.time_limit_s": 300})
+    plan = plan_mission(mission, seed=0, workers=1)
+    folder = work / "sim.orig"
+    write_plan(plan, folder)
+    write_log(simulate(mission, seed=1, plan=plan), folder)
+    return folder
+
+
+@fuzz("simulation log")
+@given(data=st.data())
+def test_simulation_logs(sim_folder: Path, data) -> None:
+    """`swarm report` on a simulation folder with one of outcome.json, events.jsonl (one line of it,
+    or the whole file) or trajectories.npz broken."""
+    from swarm.report.load import report_for
+
+    folder = _copy_folder(sim_folder, sim_folder.parent / "sim")
+    name = data.draw(
+        st.sampled_from(["outcome.json", "events.jsonl", "events.jsonl line", "trajectories.npz"])
+    )
+    if name in ("trajectories.npz", "events.jsonl"):
+        path = folder / name
+        path.write_bytes(data.draw(mutated_bytes(path.read_bytes()), label="file"))
+    elif name == "events.jsonl line":
+        path = folder / "events.jsonl"
+        lines = path.read_bytes().splitlines(keepends=True)
+        i = data.draw(st.integers(0, len(lines) - 1), label="line")
+        lines[i] = data.draw(mutated_text(lines[i].decode(), dump=json.dumps), label="event") + b"\n"
+        path.write_bytes(b"".join(lines))
+    else:
+        path = folder / name
+        path.write_bytes(data.draw(mutated_text(path.read_text(), dump=json.dumps), label="file"))
+    only_our_error(lambda p: report_for(p).markdown(), folder)
+
+
+@fuzz("evaluation.json")
+@given(data=st.data())
+def test_plan_evaluations(plan_json: Path, data) -> None:
+    """`swarm report` on a plan folder whose evaluation.json (`swarm plan --evaluate`) is broken."""
+    from swarm.report.load import report_for
+
+    original = {
+        "runs": 4,
+        "successes": 3,
+        "success_rate": 0.75,
+        "wilson_low": 0.3,
+        "wilson_high": 0.95,
+        "target": 0.9,
+        "confidence": 0.95,
+        "detection": None,
+        "detection_values": [],
+        "lost": {"mean": 1.0, "min": 0, "max": 2, "p50": 1.0},
+        "lost_values": [0, 1, 2, 1],
+        "losses_by_cause": {"failure": 4},
+        "losses_by_phase": {"beach": {"failure": 4}},
+        "seeds": [1, 2, 3, 4],
+        "folder": "evaluation/plan",
+        "suggested_count": 18,
+        "sizes": [{"count": 18, "runs": 4, "success_rate": 1.0, "wilson_low": 0.5, "wilson_high": 1.0}],
+    }
+    plan_json.write_text((plan_json.parent.parent / "plan.json.orig").read_text())
+    path = plan_json.parent / "evaluation.json"
+    path.write_bytes(data.draw(mutated_text(json.dumps(original), dump=json.dumps), label="file"))
+    only_our_error(lambda p: report_for(p).markdown(), plan_json.parent)
+
+
+@pytest.fixture(scope="module")
+def validation_folder(work: Path) -> Path:
+    """A validation folder as `swarm model validate --compare --out` writes it, on a shipped run."""
+    from swarm.cli import main
+
+    folder = work / "validation.orig"
+    args = ["model", "validate", "--robot", str(DATA / "robots" / "skid4.yaml")]
+    args += ["--encoders", str(RUNS / "concrete_straight_encoders.txt")]
+    args += ["--truth", str(RUNS / "concrete_straight_truth.txt"), "--compare", "--out", str(folder)]
+    assert main(args) == 0
+    return folder
+
+
+@fuzz("validation.json")
+@given(data=st.data())
+def test_validations(validation_folder: Path, data) -> None:
+    """`swarm report` on a validation folder with validation.json or validation.npz broken."""
+    from swarm.report.load import report_for
+
+    folder = _copy_folder(validation_folder, validation_folder.parent / "validation")
+    name = data.draw(st.sampled_from(["validation.json", "validation.npz"]))
+    path = folder / name
+    if name.endswith(".npz"):
+        path.write_bytes(data.draw(mutated_bytes(path.read_bytes()), label="file"))
+    else:
+        path.write_bytes(data.draw(mutated_text(path.read_text(), dump=json.dumps), label="file"))
+    only_our_error(lambda p: report_for(p).markdown(), folder)
