@@ -18,9 +18,10 @@ import io
 import json
 from dataclasses import dataclass
 from pathlib import Path
+from typing import get_type_hints
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, ConfigDict, Field, create_model
 
 from swarm.errors import InputError
 from swarm.files import atomic_path, read_json, read_npz, write_text_atomic
@@ -37,22 +38,12 @@ TARGET_RMSE_PCT = 3.0
 POSE_KEYS = ("t_s", "x_m", "y_m", "heading_rad")
 
 
-class _ScoreEntry(BaseModel):
-    """One model's score as validation.json keeps it (`Score.as_dict`)."""
-
-    model_config = ConfigDict(extra="ignore", strict=True, frozen=True)
-
-    model: str
-    run: str
-    terrain: str
-    distance_m: float
-    duration_s: float
-    final_error_m: float
-    path_rmse_m: float
-    path_rmse_pct: float
-    max_error_m: float
-    heading_rmse_deg: float
-    final_heading_error_deg: float
+#: One model's score as validation.json keeps it (`Score.as_dict`): the dataclass's fields, checked.
+_ScoreEntry = create_model(
+    "_ScoreEntry",
+    __config__=ConfigDict(extra="ignore", strict=True, frozen=True),
+    **{name: (kind, ...) for name, kind in get_type_hints(Score).items()},
+)
 
 
 class _ValidationMeta(BaseModel):
@@ -68,7 +59,7 @@ class _ValidationMeta(BaseModel):
     arrays: str = Field(ARRAYS_FILE, pattern=r"^[^/\\]+$")
 
 
-class ValidationFile(_ScoreEntry):
+class ValidationFile(_ScoreEntry):  # type: ignore[misc,valid-type]
     """validation.json (`Validation.as_json`) as `swarm report` reads it: the chosen model's score,
     the others' under "compare", and what the report needs under "validation"."""
 
