@@ -12,6 +12,12 @@ validation can consume it unchanged:
     python benchmarks/reference/make_runs.py --pattern-npz P.npz --surface concrete --out DIR \\
         --heading0-deg 180
     python benchmarks/reference/make_runs.py --demo --surface hardsand --out DIR  # square-spiral-line
+    python benchmarks/reference/make_runs.py --patterns --out DIR  # the held-out benchmark's set
+
+``--patterns`` writes, for each surface, the thesis's straight, square, spiral and
+square-spiral-line as `swarm.robot.patterns` builds them for skid4 (initial headings 136, 180, 0
+and 180 degrees, as the sample runs start), and the hand-made ``--demo`` run as ``demo``: the
+set `benchmarks/bench_heldout.py` scores (``--tests spiral,demo,square_spiral_line``).
 """
 
 from __future__ import annotations
@@ -103,12 +109,43 @@ def square_spiral_line() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return t, left, right
 
 
+#: Pattern name -> initial heading (degrees), as the sample runs start.
+PATTERN_HEADINGS = {"straight": 136.0, "square": 180.0, "spiral": 0.0, "square_spiral_line": 180.0}
+
+
+def pattern_set(out_dir: Path, surfaces: list[str], seed: int = 0) -> None:
+    """The held-out benchmark's runs: the four thesis patterns and the demo, on each surface."""
+    from swarm.robot.patterns import make_pattern
+
+    for surface in surfaces:
+        for name, heading0_deg in PATTERN_HEADINGS.items():
+            p = make_pattern(name.replace("_", "-"), dt_s=1.0 / RATE_HZ)
+            t = np.round(p.t_s - p.t_s[0], 6)  # already the 100 Hz grid: no resampling
+            sim = simulate(t, p.left_radps, p.right_radps, surface, math.radians(heading0_deg), seed=seed)
+            write_run(
+                Path(out_dir) / f"{surface}_{name}",
+                t,
+                sim,
+                int(load_robot()["encoder_ticks_per_wheel_rev"]),
+                seed,
+            )
+            print(f"{surface}_{name}")
+        t, left, right = square_spiral_line()
+        make_run(t, left, right, surface, "demo", out_dir, math.radians(180.0), seed)
+        print(f"{surface}_demo")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description="Write a held-out reference run in the thesis formats.")
     src = ap.add_mutually_exclusive_group(required=True)
     src.add_argument("--pattern-npz", type=Path, help="npz with arrays t_s, left_radps, right_radps")
     src.add_argument("--demo", action="store_true", help="use the built-in square-spiral-line test pattern")
-    ap.add_argument("--surface", required=True, choices=sorted(load_surfaces()), help="see surfaces.yaml")
+    src.add_argument(
+        "--patterns", action="store_true", help="the thesis's four patterns and the demo on every surface"
+    )
+    ap.add_argument(
+        "--surface", choices=sorted(load_surfaces()), help="see surfaces.yaml (all with --patterns)"
+    )
     ap.add_argument("--out", type=Path, required=True, help="output folder")
     ap.add_argument("--pattern", help="pattern name in file names (default: npz stem or square_spiral_line)")
     ap.add_argument(
@@ -120,6 +157,11 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=0, help="soft-sand lumps and encoder jitter")
     ap.add_argument("--save-demo-npz", type=Path, help="with --demo: also save the commands as npz")
     args = ap.parse_args()
+    if args.patterns:
+        pattern_set(args.out, [args.surface] if args.surface else sorted(load_surfaces()), args.seed)
+        return
+    if args.surface is None:
+        ap.error("--surface is required with --pattern-npz or --demo")
 
     if args.demo:
         t, left, right = square_spiral_line()

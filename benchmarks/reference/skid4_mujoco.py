@@ -106,7 +106,8 @@ def build_mjcf(
     half_track = robot["track_width_m"] / 2
     half_base = robot["wheelbase_m"] / 2
     mw = robot["wheel_mass_kg"]
-    m_body = robot["mass_kg"] - 4 * mw
+    ballast_kg = float(robot.get("ballast_kg", 0.0))
+    m_body = robot["mass_kg"] - 4 * mw - ballast_kg
     lx, ly, lz = robot["length_m"] / 2, robot["width_m"] / 2, robot["height_m"] / 2
     z0 = r + relief_m + 0.005  # just above the highest possible ground; reset() lets it settle
 
@@ -120,6 +121,14 @@ def build_mjcf(
         asset = ""
         ground = '<geom name="ground" type="plane" size="0 0 1" contype="0" conaffinity="0"/>'
 
+    # an optional payload: a small dense box inside the chassis, `ballast_x_m` ahead of the wheel
+    # centre, that moves the centre of mass (the rear-heavy held-out variant, make_variant.py)
+    ballast = (
+        f'<geom name="ballast" type="box" size="0.05 0.1 0.03" pos="{robot.get("ballast_x_m", 0.0)} 0 0" '
+        f'mass="{ballast_kg}" contype="0" conaffinity="0"/>'
+        if ballast_kg > 0
+        else ""
+    )
     sol = f"{surface.timeconst} {surface.dampratio}"
     fric = f"{surface.sliding} {surface.sliding} {surface.torsional} {surface.rolling} {surface.rolling}"
     wheels, pairs, acts = [], [], []
@@ -150,6 +159,7 @@ def build_mjcf(
       <freejoint name="root"/>
       <geom name="chassis" type="box" size="{lx} {ly} {lz}" mass="{m_body}"
             contype="0" conaffinity="0"/>
+      {ballast}
       {"".join(wheels)}
     </body>
   </worldbody>
