@@ -13,11 +13,17 @@ validation can consume it unchanged:
         --heading0-deg 180
     python benchmarks/reference/make_runs.py --demo --surface hardsand --out DIR  # square-spiral-line
     python benchmarks/reference/make_runs.py --patterns --out DIR  # the held-out benchmark's set
+    python benchmarks/reference/make_runs.py --patterns --timeconst 0.004 --out DIR  # stiffer contacts
 
 ``--patterns`` writes, for each surface, the thesis's straight, square, spiral and
 square-spiral-line as `swarm.robot.patterns` builds them for skid4 (initial headings 136, 180, 0
 and 180 degrees, as the sample runs start), and the hand-made ``--demo`` run as ``demo``: the
 set `benchmarks/bench_heldout.py` scores (``--tests spiral,demo,square_spiral_line``).
+
+``--timeconst S`` replaces every surface's contact softness (MuJoCo's solref time constant,
+0.014-0.022 s in surfaces.yaml) by S: the same engine with stiffer (or softer) contacts, to see
+what the fitted softness does to turning (README, Accuracy: at 0.004 s most of skid4's rise in
+hard-sand turning efficiency from wide arcs to a pivot, and its speed dependence, are gone).
 """
 
 from __future__ import annotations
@@ -26,13 +32,20 @@ import argparse
 import math
 import sys
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from run_files import RATE_HZ, write_run
-from skid4_mujoco import REPO, load_robot, load_surfaces, simulate
+from skid4_mujoco import REPO, Surface, load_robot, load_surfaces, simulate
+
+
+def surface_for(name: str, timeconst: float | None = None) -> Surface:
+    """A surface of surfaces.yaml, its contact time constant replaced when `timeconst` is given."""
+    surface = load_surfaces()[name]
+    return surface if timeconst is None else replace(surface, timeconst=timeconst)
 
 
 def make_run(
@@ -44,6 +57,7 @@ def make_run(
     out_dir: Path,
     heading0_rad: float,
     seed: int = 0,
+    timeconst: float | None = None,
 ) -> dict[str, Path]:
     """Simulate a commanded pattern on a surface and write its three files; returns their paths.
 
@@ -55,7 +69,7 @@ def make_run(
     t = np.round(np.arange(0, round(dur * RATE_HZ) + 1) / RATE_HZ, 6)
     left = np.interp(t, t_s - t_s[0], left_radps)
     right = np.interp(t, t_s - t_s[0], right_radps)
-    sim = simulate(t, left, right, surface, heading0_rad, seed=seed)
+    sim = simulate(t, left, right, surface_for(surface, timeconst), heading0_rad, seed=seed)
     return write_run(
         Path(out_dir) / f"{surface}_{pattern}",
         t,
@@ -113,15 +127,17 @@ def square_spiral_line() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 PATTERN_HEADINGS = {"straight": 136.0, "square": 180.0, "spiral": 0.0, "square_spiral_line": 180.0}
 
 
-def pattern_set(out_dir: Path, surfaces: list[str], seed: int = 0) -> None:
-    """The held-out benchmark's runs: the four thesis patterns and the demo, on each surface."""
+def pattern_set(out_dir: Path, surfaces: list[str], seed: int = 0, timeconst: float | None = None) -> None:
+    """The held-out benchmark's runs: the four thesis patterns and the demo, on each surface
+    (its contact time constant replaced by `timeconst` if given)."""
     from swarm.robot.patterns import make_pattern
 
     for surface in surfaces:
         for name, heading0_deg in PATTERN_HEADINGS.items():
             p = make_pattern(name.replace("_", "-"), dt_s=1.0 / RATE_HZ)
             t = np.round(p.t_s - p.t_s[0], 6)  # already the 100 Hz grid: no resampling
-            sim = simulate(t, p.left_radps, p.right_radps, surface, math.radians(heading0_deg), seed=seed)
+            surf = surface_for(surface, timeconst)
+            sim = simulate(t, p.left_radps, p.right_radps, surf, math.radians(heading0_deg), seed=seed)
             write_run(
                 Path(out_dir) / f"{surface}_{name}",
                 t,
@@ -131,7 +147,7 @@ def pattern_set(out_dir: Path, surfaces: list[str], seed: int = 0) -> None:
             )
             print(f"{surface}_{name}")
         t, left, right = square_spiral_line()
-        make_run(t, left, right, surface, "demo", out_dir, math.radians(180.0), seed)
+        make_run(t, left, right, surface, "demo", out_dir, math.radians(180.0), seed, timeconst)
         print(f"{surface}_demo")
 
 
@@ -156,9 +172,13 @@ def main() -> None:
     )
     ap.add_argument("--seed", type=int, default=0, help="soft-sand lumps and encoder jitter")
     ap.add_argument("--save-demo-npz", type=Path, help="with --demo: also save the commands as npz")
+    ap.add_argument(
+        "--timeconst", type=float, help="contact time constant (s) of every surface (default: surfaces.yaml)"
+    )
     args = ap.parse_args()
     if args.patterns:
-        pattern_set(args.out, [args.surface] if args.surface else sorted(load_surfaces()), args.seed)
+        surfaces = [args.surface] if args.surface else sorted(load_surfaces())
+        pattern_set(args.out, surfaces, args.seed, args.timeconst)
         return
     if args.surface is None:
         ap.error("--surface is required with --pattern-npz or --demo")
@@ -176,7 +196,9 @@ def main() -> None:
         heading0 = 0.0 if args.heading0_deg is None else args.heading0_deg
 
     t0 = time.time()
-    paths = make_run(t, left, right, args.surface, pattern, args.out, math.radians(heading0), args.seed)
+    paths = make_run(
+        t, left, right, args.surface, pattern, args.out, math.radians(heading0), args.seed, args.timeconst
+    )
     print(f"{args.surface}_{pattern}: {t[-1] - t[0]:.1f} s simulated in {time.time() - t0:.1f} s")
     for p in paths.values():
         print(f"  {p}")

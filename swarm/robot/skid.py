@@ -42,7 +42,12 @@ model's efficiency, yaw rate over the kinematic, is nearly the same from wide ar
 its patches slide; MuJoCo's rises 10-27% from wide arcs to the pivot (bench_turning.py in
 benchmarks/), which is why a fit on the square turns MuJoCo's hard-sand pivots short. The
 calibration-side changes tried against that, each scored on 20 held-out runs of three engines and
-robots and none kept, are listed in the README's Accuracy section.)
+robots and none kept, are listed in the README's Accuracy section, with a second attempt's: fits
+of short prediction windows, and distinct longitudinal and lateral shear moduli, which lower the
+wide arcs' efficiency but not the pivot's. For skid4 on MuJoCo's hard sand the rise is mostly the
+engine's contact softness (3% of its 10% left at a 0.004 s contact time constant); what is left of
+the pivot's miss there is this model's rolling resistance, whose moment in a pivot the engines'
+wheel-torque rolling friction does not have.)
 
 Rolling resistance c_rr N opposes each contact's rolling. Water carries part of the weight
 (`buoyancy_fraction`) and drags the hull quadratically. An external body-frame wrench (Fx, Fy,
