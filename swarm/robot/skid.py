@@ -35,14 +35,14 @@ this model, 3 runs within 1.5%: Wong's patch-integrated stress, mu N [1 - (k/s)(
 31.1% and 2 runs (wide arcs then resist with half of Steeds' turning resistance on concrete,
 `tests/robot/test_turning.py`); the normality rule of the limit surface, force along
 (mu_x^2 s_x, mu_y^2 s_y, tau^2 r), 37.5% and 3 runs. What the turning misses on those engines
-traces to them (README, Accuracy): MuJoCo's rolling friction is a wheel torque where this model's
+traces to them (docs/turning-accuracy.md): MuJoCo's rolling friction is a wheel torque where this model's
 c_rr N opposes the hub's travel, as a pivot's rolling resistance does in Kozlowski & Pazderski
 (AMCS 14(4), 2004), and Bullet's yaw lags and overshoots its commands. In steady turning this
 model's efficiency, yaw rate over the kinematic, is nearly the same from wide arcs to a pivot once
 its patches slide; MuJoCo's rises 10-27% from wide arcs to the pivot (bench_turning.py in
 benchmarks/), which is why a fit on the square turns MuJoCo's hard-sand pivots short. The
 calibration-side changes tried against that, each scored on 20 held-out runs of three engines and
-robots and none kept, are listed in the README's Accuracy section, with a second attempt's: fits
+robots and none kept, are listed in docs/turning-accuracy.md, with a second attempt's: fits
 of short prediction windows, and distinct longitudinal and lateral shear moduli, which lower the
 wide arcs' efficiency but not the pivot's. For skid4 on MuJoCo's hard sand the rise is mostly the
 engine's contact softness (3% of its 10% left at a 0.004 s contact time constant); what is left of
