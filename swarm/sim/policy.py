@@ -39,6 +39,7 @@ from __future__ import annotations
 import itertools
 import math
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from scipy.sparse import csr_matrix
@@ -46,8 +47,8 @@ from scipy.spatial import cKDTree
 
 from swarm.planning.allocation import auction
 from swarm.sim.criteria import STATION_RADIUS_M
-from swarm.sim.env import FOLLOW, LOITER, MARK, RETURN, RETURNING, SEA, SwarmEnv
 from swarm.sim.layout import ROLES
+from swarm.sim.runview import FOLLOW, LOITER, MARK, RETURN, RETURNING, SEA, RunView
 from swarm.sim.standoff import SafeGround, free_cell_graph
 
 #: Extra distance beyond the clearance standoff that robots retreat to (m).
@@ -109,14 +110,22 @@ def split_polyline(points: np.ndarray, piece_m: float) -> list[np.ndarray]:
 
 
 class ScriptedPolicy:
-    """Coordination by script over an environment made with action_mode="command"."""
+    """Coordination by script of one run: a `RunView` of a batch (`swarm.sim.world`), or a
+    `SwarmEnv` made with action_mode="command" (its run).
+
+    Everything it reads and commands goes through the run's interface (`swarm.sim.runview`):
+    the per-robot arrays, `routes`, `router`, `links`, `score`, `events`, `objects_m`,
+    `set_command`, `set_route`, `route_goal` and `log_event`."""
 
     def __init__(
-        self, env: SwarmEnv, *, realloc_period_s: float = 5.0, clearance_lead_s: float = 120.0
+        self, env: RunView | Any, *, realloc_period_s: float = 5.0, clearance_lead_s: float = 120.0
     ) -> None:
-        if env.action_mode != "command":
-            raise ValueError("ScriptedPolicy needs an environment with action_mode='command'")
-        self.env = env
+        if not isinstance(env, RunView):
+            if getattr(env, "action_mode", None) != "command":
+                raise ValueError("ScriptedPolicy needs an environment with action_mode='command'")
+            self.agent_env = env
+            env = env.run
+        self.env: RunView = env
         self.realloc_period_s = realloc_period_s
         self.clearance_lead_s = clearance_lead_s
         self._graph: csr_matrix | None = None  # the cost map's free cells (`standoff`), built once
@@ -139,9 +148,11 @@ class ScriptedPolicy:
         self.update()
         env = self.env
         return {
-            a: {"command": int(env.command[i]), "target": env.target_m[i].astype(np.float32)}
-            for a in env.agents
-            for i in (env.agent_index[a],)
+            env.possible_agents[i]: {
+                "command": int(env.command[i]),
+                "target": env.target_m[i].astype(np.float32),
+            }
+            for i in np.flatnonzero(env.in_agents).tolist()
         }
 
     def update(self) -> None:
@@ -217,7 +228,7 @@ class ScriptedPolicy:
         clearance, the end of the route it will resume (a beacon robot lost while clear of the
         blast used to hand its retreat point, not its beacon, to the robot taking over)."""
         held = self._held.get(i)
-        return held[0][-1].copy() if held is not None else self.env._route_goal()[i]
+        return held[0][-1].copy() if held is not None else self.env.route_goal()[i]
 
     def _on_loss(self, i: int) -> None:
         """Ashore, a loss is known to the robot's radio component. A robot lost before it reached
@@ -375,7 +386,7 @@ class ScriptedPolicy:
     def _station_goals(self) -> np.ndarray:
         """Where each robot's route ends, or, for a stand-by waiting out a clearance, the point
         it waits to hold."""
-        goals = self.env._route_goal().copy()
+        goals = self.env.route_goal().copy()
         for i, point in self._waiting.items():
             goals[i] = point
         return goals
@@ -435,7 +446,7 @@ class ScriptedPolicy:
         env = self.env
         it.taken_by = i
         self._waiting.pop(i, None)
-        env._event("takeover", i, item=it.kind, role=it.role, obj=it.obj)
+        env.log_event("takeover", i, item=it.kind, role=it.role, obj=it.obj)
         if it.kind == "mark":
             env.set_command(i, MARK, env.objects_m[it.obj])
             return
@@ -456,7 +467,7 @@ class ScriptedPolicy:
         for i in np.flatnonzero(low):
             self._release_work(int(i), self._hearers(int(i)))
             env.set_command(int(i), RETURN)
-            env._event("battery_reserve", int(i))
+            env.log_event("battery_reserve", int(i))
 
     def lead_s(self) -> float:
         """How long before the detonation robots start clearing the standoff."""

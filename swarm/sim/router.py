@@ -9,6 +9,8 @@ and a counter, so a run replays exactly.
 
 from __future__ import annotations
 
+import copy
+
 import numpy as np
 from scipy import ndimage
 
@@ -26,6 +28,13 @@ class Router:
         self.seed = seed
         self.calls = 0
         _, (self._near_r, self._near_c) = ndimage.distance_transform_edt(cm.blocked, return_indices=True)
+
+    def fork(self) -> Router:
+        """A router sharing this one's map tables, with its own call counter from 0: one run's
+        replanning seeds, whatever other runs of a batch plan."""
+        other = copy.copy(self)
+        other.calls = 0
+        return other
 
     def snap(self, xy: np.ndarray) -> np.ndarray:
         """(x, y) if a robot may stand there, else the centre of the nearest free cell."""

@@ -449,3 +449,90 @@ def _in_disc(rng: np.random.Generator, k: int, radius: float) -> np.ndarray:
     rho = radius * np.sqrt(u[:, 0])
     theta = 2.0 * math.pi * u[:, 1]
     return np.column_stack([rho * np.cos(theta), rho * np.sin(theta)])
+
+
+_BIN_OFFSET = 1 << 21
+_RUN_STRIDE = 1 << 44
+
+
+class SensorScreen:
+    """For a batch of runs (`swarm.sim.world`), which runs' sensors have anything to do this step:
+    a pass in progress, a sensing robot in a bin next to a target mine of its run (`_maybe_near`'s
+    bins, so the same superset), a track segment longer than the screen's margin, or a false alarm
+    to draw for. The others' `update` would draw nothing and find nothing, so only their last
+    positions move on (`settle`). `dirty(b)` after run b's targets change (a find, a blast, the
+    clearance)."""
+
+    def __init__(self, sensors: list[MineSensor | None], n: int) -> None:
+        self.sensors = sensors
+        self.n = n
+        self.runs = len(sensors)
+        live = [s for s in sensors if s is not None]
+        self.size = (live[0].range_m + SCREEN_MARGIN_M) if live else 1.0
+        self.false_alarms = bool(live) and live[0].false_alarms_per_m > 0
+        self._dirty = np.ones(self.runs, bool)
+        self._keys = np.empty(0, np.int64)
+        self._per_run: list[np.ndarray] = [np.empty(0, np.int64)] * self.runs
+
+    def dirty(self, b: int) -> None:
+        self._dirty[b] = True
+
+    def _bins(self, xy: np.ndarray) -> np.ndarray:
+        return np.clip(np.floor(xy / self.size), -_BIN_OFFSET + 1, _BIN_OFFSET - 2).astype(np.int64)
+
+    @staticmethod
+    def _bin_keys(bins: np.ndarray, run: np.ndarray) -> np.ndarray:
+        bins = bins + _BIN_OFFSET
+        return run.astype(np.int64) * _RUN_STRIDE + (bins[:, 0] << 22) + bins[:, 1]
+
+    def _refresh(self) -> None:
+        for b in np.flatnonzero(self._dirty).tolist():
+            s = self.sensors[b]
+            keys = np.empty(0, np.int64)
+            if s is not None and s._m:
+                field = s.minefield
+                target = field.active & ~field.detected
+                if target.any():
+                    bins = self._bins(field.positions_m[target])
+                    around = (bins[:, None, :] + _NEIGHBOUR_BINS[None, :, :]).reshape(-1, 2)
+                    keys = self._bin_keys(around, np.full(len(around), b))
+            self._per_run[b] = keys
+        self._dirty[:] = False
+        self._keys = np.unique(np.concatenate(self._per_run))
+
+    def busy(
+        self,
+        xy: np.ndarray,
+        last_xy: np.ndarray,
+        sensing: np.ndarray,
+        distance_m: np.ndarray,
+        runs: list[int],
+    ) -> list[int]:
+        """Of `runs`, those whose sensors must `update` this step. Arrays (runs * n, ...) cover
+        every run of the batch, run-major; `sensing` already excludes non-finite positions."""
+        n = self.n
+        out = []
+        if self._dirty.any():
+            self._refresh()
+        per_run_any = np.zeros(self.runs, bool)
+        if self.false_alarms:
+            per_run_any |= (sensing & (distance_m > 0)).reshape(self.runs, n).any(axis=1)
+        who = np.flatnonzero(sensing)
+        if len(who):
+            run = who // n
+            near = np.zeros(len(who), bool)
+            if len(self._keys):
+                keys = self._bin_keys(self._bins(xy[who]), run)
+                at = np.minimum(np.searchsorted(self._keys, keys), len(self._keys) - 1)
+                near = self._keys[at] == keys
+            seg = xy[who] - last_xy[who]
+            with np.errstate(invalid="ignore"):
+                near |= (seg[:, 0] * seg[:, 0] + seg[:, 1] * seg[:, 1]) > SCREEN_MARGIN_M**2
+            per_run_any[run[near]] = True
+        for b in runs:
+            s = self.sensors[b]
+            if s is None or (not s._m and not self.false_alarms):
+                continue
+            if per_run_any[b] or len(s._keys):
+                out.append(b)
+        return out
