@@ -17,8 +17,8 @@ Columns, in order:
   y_m: float64): every loss, for loss maps and losses by phase.
 - ``completed_s`` (float64): mission time when every criterion was first met; null if never.
 - ``duration_s`` (float64): mission time simulated.
-- ``runtime_s`` (float64): wall-clock seconds the run took (the only column that differs between
-  two runs of the same study).
+- ``runtime_s`` (float64): wall-clock seconds the run took, its share of its batch's when it ran in
+  a batch (the only column that differs between two runs of the same study).
 """
 
 from __future__ import annotations
