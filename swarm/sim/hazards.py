@@ -247,6 +247,12 @@ class _ContactScreen:
         """Indices where `mask` of the robots in a flagged cell of their run's grid (`run` (n,))."""
         if self.empty:
             return np.empty(0, dtype=np.intp)
+        if len(self.nx) == 1:  # one run: its grid's numbers as scalars (`_ContactIndex`'s own screen)
+            nx, ny = int(self.nx[0]), int(self.ny[0])
+            c = (xy - self.lo[0]) * float(self.inv_cell[0])
+            x, y = c[:, 0], c[:, 1]
+            sel = np.flatnonzero(mask & (x >= 0.0) & (x < nx) & (y >= 0.0) & (y < ny))
+            return sel[self.grid[y[sel].astype(np.intp) * nx + x[sel].astype(np.intp)]]
         c = (xy - self.lo[run]) * self.inv_cell[run][:, None]
         x, y = c[:, 0], c[:, 1]
         nx = self.nx[run]
@@ -409,7 +415,7 @@ class HazardModel:
         if not self.hazards.enabled:
             none = np.full(size, NO_LOSS, dtype=np.int64)
             return Losses(cause=none, mine=np.full(size, -1, dtype=np.int64), radio_dropped=none >= 0)
-        every = runs == list(range(self.runs))
+        every = len(runs) == self.runs  # runs are distinct: all of them, in order
         rows = slice(None) if every else np.concatenate([np.arange(b * n, (b + 1) * n) for b in runs])
         run_of = self._run_of[rows]
         alive = inp.alive
@@ -466,6 +472,11 @@ class HazardModel:
         """(run, local row, points) of every robot touching a point of its run's index, in row order."""
         sel = screen.screen(xy, mask, run_of)
         if sel.size == 0:
+            return
+        if self.runs == 1:
+            robots, near = indexes[0].exact(xy, sel)
+            for k, pts in zip(robots.tolist(), near, strict=True):
+                yield 0, k, pts
             return
         runs = run_of[sel]
         cuts = np.flatnonzero(np.diff(runs)) + 1

@@ -141,6 +141,7 @@ class ScriptedPolicy:
         self._returning = False
         self._links_seen = -1
         self._safe_cache: tuple[tuple[bytes, float], SafeGround] | None = None
+        self._found_cache: tuple[tuple[int, int, int], np.ndarray, cKDTree | None] | None = None
 
     # the step ------------------------------------------------------------------------------------
     def act(self) -> dict[str, dict]:
@@ -258,15 +259,19 @@ class ScriptedPolicy:
         if env.links_version == self._links_seen:
             return  # news travels only when the radio graph is updated
         self._links_seen = env.links_version
+        open_items = [it for it in self.items if it.taken_by < 0 and it.audience.any()]
+        if not open_items:
+            return
         comp = env.links.component[: env.n]
         alive = env.alive
-        reached = np.zeros(int(comp.max(initial=-1)) + 2, bool)  # per component (+1: -1 is none)
-        for it in self.items:
-            if it.taken_by >= 0 or not it.audience.any():
-                continue
-            reached[:] = False
-            reached[comp[it.audience & alive] + 1] = True
-            it.audience = (it.audience | reached[comp + 1]) & alive
+        # every open item at once: the components its audience reaches (+1: -1 is none), then all of
+        # each reached component's robots
+        heard = np.array([it.audience for it in open_items]) & alive
+        reached = np.zeros((len(open_items), int(comp.max(initial=-1)) + 2), bool)
+        item, robot = np.nonzero(heard)
+        reached[item, comp[robot] + 1] = True
+        for it, audience in zip(open_items, (heard | reached[:, comp + 1]) & alive, strict=True):
+            it.audience = audience
 
     # who is free ----------------------------------------------------------------------------------------
     def _idle(self) -> np.ndarray:
@@ -405,12 +410,22 @@ class ScriptedPolicy:
         """The mines found so far, how far to keep from them (the clearance standoff and the
         margin), and which of the robots `who` are closer than that to one."""
         env = self.env
-        found = sorted({it.obj for it in self.items if it.kind == "mark"})
-        objs = env.objects_m[found]
+        objs, tree = self._found_mines()
         safe_m = env.clearance.standoff_m + STANDOFF_MARGIN_M
-        if not found or not len(who):
+        if tree is None or not len(who):
             return objs, safe_m, who[:0]
-        return objs, safe_m, who[cKDTree(objs).query(env.robot_state[who, :2])[0] < safe_m]
+        return objs, safe_m, who[tree.query(env.robot_state[who, :2])[0] < safe_m]
+
+    def _found_mines(self) -> tuple[np.ndarray, cKDTree | None]:
+        """Where the objects of the mark items are, in object order, and a k-d tree of them (kept
+        while the items and the objects stay the same)."""
+        env = self.env
+        key = (len(self.items), len(env.objects_m), id(env.objects_m))
+        if self._found_cache is None or self._found_cache[0] != key:
+            found = sorted({it.obj for it in self.items if it.kind == "mark"})
+            objs = env.objects_m[found]
+            self._found_cache = (key, objs, cKDTree(objs) if found else None)
+        return self._found_cache[1], self._found_cache[2]
 
     def _mark_due(self, it: WorkItem, free: np.ndarray) -> bool:
         """A mark is due once nobody is searching any more, or when the nearest robot free to take it
@@ -515,7 +530,7 @@ class ScriptedPolicy:
         objs, safe_m, near = self._inside_standoff(np.flatnonzero(env.alive & env.on_map & (env.marking < 0)))
         if not len(near):
             return False
-        starts = np.array([env.router.snap(xy) for xy in env.robot_state[near, :2]])
+        starts = env.router.snap_many(env.robot_state[near, :2])
         far = self._safe_ground(objs, safe_m).distance_m(starts)
         far = far[np.isfinite(far)]
         if not len(far):

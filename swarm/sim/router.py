@@ -45,6 +45,17 @@ class Router:
         r2, c2 = int(self._near_r[r, c]), int(self._near_c[r, c])
         return np.array([float(v) for v in self.cm.center_of(r2, c2)])
 
+    def snap_many(self, xy: np.ndarray) -> np.ndarray:
+        """`snap` of each point of `xy` (k, 2), in one pass."""
+        xy = np.asarray(xy, dtype=np.float64).reshape(-1, 2)
+        out = xy.copy()
+        free = np.asarray(self.cm.is_free(xy[:, 0], xy[:, 1]), bool)
+        if not free.all():
+            r, c = self.cm.cell_of(xy[~free, 0], xy[~free, 1])
+            x, y = self.cm.center_of(self._near_r[r, c], self._near_c[r, c])
+            out[~free, 0], out[~free, 1] = x, y
+        return out
+
     def reachable(self, xy: np.ndarray) -> np.ndarray:
         """A target a robot can get to: itself if free or open water (it swims there), else the
         nearest free cell (a track point on a driftwood log, in a boulder's footprint margin)."""

@@ -57,6 +57,7 @@ from swarm.sim.runview import (
     WAITING,
     RunView,
 )
+from swarm.sim.sensor_batch import SensorBatch
 from swarm.sim.setup import MissionSetup
 
 #: A marking robot marks the object it loiters by within this distance (m).
@@ -133,14 +134,19 @@ class World:
         self.wave_phase_s = np.zeros(b)
         self.routes = Routes(b * n)
         self._sense_xy = np.full((b * n, 2), np.nan)  # each sensor's last positions (views)
+        self._flat: dict[str, np.ndarray] = {}
         self.runs = [RunView(self, k) for k in range(b)]
         self.hazard_model: hazards.HazardModel | None = None
-        self.sensor_screen: sensing.SensorScreen | None = None
+        self.sensors: SensorBatch | None = None
 
     def flat(self, name: str) -> np.ndarray:
-        """A per-robot array as (B * n, ...), a view."""
-        a = getattr(self, name)
-        return a.reshape(self.B * self.n, *a.shape[2:])
+        """A per-robot array as (B * n, ...), a view (the arrays are never rebound, so the views
+        are made once)."""
+        view = self._flat.get(name)
+        if view is None:
+            a = getattr(self, name)
+            view = self._flat[name] = a.reshape(self.B * self.n, *a.shape[2:])
+        return view
 
     # reset ------------------------------------------------------------------------------------------
     def reset(self, seeds: Sequence[int | None], runs: Sequence[int] | None = None) -> None:
@@ -160,13 +166,13 @@ class World:
             self.hazard_model = hazards.HazardModel(
                 m.hazards, m.phases, s.beach.terrain_classes, s.library, fields, rocks, self.n
             )
-            self.sensor_screen = sensing.SensorScreen([r.sensor for r in self.runs], self.n)
+            self.sensors = SensorBatch([r.sensor for r in self.runs], self.n)
         else:
             self.hazard_model.reset_runs(runs, fields, rocks)
-            assert self.sensor_screen is not None
+            assert self.sensors is not None
             for b in runs:
-                self.sensor_screen.sensors[b] = self.runs[b].sensor
-                self.sensor_screen.dirty(b)
+                self.sensors.sensors[b] = self.runs[b].sensor
+                self.sensors.dirty(b)
         for b in runs:
             run = self.runs[b]
             run.log_event("mission_start", seed=run.seed, robots=self.n, mines=len(run.minefield))
@@ -302,16 +308,20 @@ class World:
         self.t_s[going] = self.steps[going] * dt
         moving = self.alive & self.on_map & going[:, None]
         state = self.flat("robot_state")
+        if self.B == 1:  # one run: its time and wave phase as scalars
+            t0, phase, run_of = float(self.t_s[0]) - dt, float(self.wave_phase_s[0]), None
+        else:
+            t0, phase, run_of = self.t_s - dt, self.wave_phase_s, self.run_of
         res = s.physics.step(
             state,
             np.asarray(wheels, np.float64).reshape(-1, 2),
             np.asarray(jet, np.float64).reshape(-1),
             self.flat("inverted"),
-            self.t_s - dt,
+            t0,
             dt,
-            self.wave_phase_s,
+            phase,
             active=moving.ravel(),
-            run=self.run_of,
+            run=run_of,
         )
         state[:] = res.state
         mv = moving.ravel()
@@ -479,32 +489,26 @@ class World:
     def _sense(self, live: list[int]) -> None:
         if self.setup.search_task is None:
             return
-        assert self.sensor_screen is not None
+        assert self.sensors is not None
         sensing_now = self.alive & self.on_map & (self.phase >= BEACH)
         xy = self.flat("robot_state")[:, :2]
         flat_sensing = sensing_now.ravel() & np.isfinite(xy).all(axis=1)
-        distance = self.flat("distance_m")
-        for b in self.sensor_screen.busy(xy, self._sense_xy, flat_sensing, distance, live):
-            run = self.runs[b]
-            found = run.sensor.update(
-                self.robot_state[b, :, :2],
-                sensing_now[b],
-                self.distance_m[b],
-                run.t_s,
-                run.rngs["sensing"],
-                alive=self.alive[b],
-            )
-            if found:
-                self.sensor_screen.dirty(b)
-            for det in found:
-                self._report(run, det)
-        # every other sensing run's passes stay as they were; only the last positions move on
-        rows = np.zeros(self.B, bool)
-        rows[live] = True
-        rows = np.repeat(rows, self.n)
-        keep = rows & flat_sensing
-        self._sense_xy[rows & ~flat_sensing] = np.nan
-        self._sense_xy[keep] = xy[keep]
+        rngs = [run.rngs.get("sensing") for run in self.runs]
+        found = self.sensors.step(
+            xy,
+            self._sense_xy,
+            flat_sensing,
+            self.flat("alive"),
+            self.flat("distance_m"),
+            live,
+            self.t_s,
+            rngs,
+        )
+        for b in sorted(found):
+            if found[b]:
+                self.sensors.dirty(b)
+            for det in found[b]:
+                self._report(self.runs[b], det)
 
     def _report(self, run: RunView, det: sensing.Detection) -> None:
         b = run.b
@@ -563,9 +567,12 @@ class World:
         dt, n = self.dt_s, self.n
         linked = self.link_degree > 0
         iso = np.where(linked | ~self.on_map, 0.0, self.isolated_s + dt)
-        self.isolated_s[going] = iso[going]
-        rows = np.repeat(going, n)
-        every = bool(going.all())
+        every = len(live) == self.B
+        if every:
+            self.isolated_s[...] = iso
+        else:
+            self.isolated_s[going] = iso[going]
+        rows = None if every else np.repeat(going, n)
         on_map = self.flat("on_map")
 
         def pick(a: np.ndarray) -> np.ndarray:
@@ -609,8 +616,8 @@ class World:
             b, i = runs[k // n], k % n
             cause = hazards.CAUSES[losses.cause[k]]
             extra = {"mine": int(losses.mine[k])} if losses.mine[k] >= 0 else {}
-            if extra and self.sensor_screen is not None:
-                self.sensor_screen.dirty(b)
+            if extra and self.sensors is not None:
+                self.sensors.dirty(b)
             self.runs[b].lose(i, cause, **extra)
         return lost
 
@@ -623,8 +630,8 @@ class World:
             if run.cleared or float(self.t_s[b]) + 1e-9 < c.at_s:
                 continue
             run.cleared = True
-            if self.sensor_screen is not None:
-                self.sensor_screen.dirty(b)
+            if self.sensors is not None:
+                self.sensors.dirty(b)
             alive, marking = self.alive[b], self.marking[b]
             markers = [
                 int(i) for i in np.flatnonzero(alive & (marking >= 0)) if run.object_marker[marking[i]] == i
