@@ -81,15 +81,12 @@ from typing import Any
 import gymnasium
 import numpy as np
 from pettingzoo import ParallelEnv
-from scipy.spatial import cKDTree
 
 from swarm.errors import SwarmError
 from swarm.mission.load import load_mission
 from swarm.mission.plan import MissionPlan, plan_mission
 from swarm.mission.schema import Mission
-from swarm.sim.control import to_body
 from swarm.sim.layout import (
-    ELEVATION_CLIP_M,
     GLOBAL_FIELDS,
     PHASES,
     ROLES,
@@ -97,6 +94,7 @@ from swarm.sim.layout import (
     ObservationLayout,
     state_size,
 )
+from swarm.sim.observe import DENSE_NEAREST_PAIRS, Observer
 from swarm.sim.runview import (
     AVOID_MINE_M,
     BEACH,
@@ -125,15 +123,13 @@ from swarm.sim.world import (
 )
 
 ACTION_MODES = ("wheels", "command")
-#: Up to this many point pairs, nearest neighbours come from a dense distance matrix (faster
-#: than building a k-d tree for a handful of objects).
-DENSE_NEAREST_PAIRS = 200_000
 
 __all__ = [
     "ACTION_MODES",
     "AVOID_MINE_M",
     "BEACH",
     "COMMANDS",
+    "DENSE_NEAREST_PAIRS",
     "DONE",
     "FOLLOW",
     "GOTO",
@@ -221,6 +217,8 @@ class SwarmEnv(ParallelEnv):
         max_cycles: int | None = None,
         plan_workers: int | None = 1,
         setup: MissionSetup | None = None,
+        world: World | None = None,
+        run: int = 0,
     ) -> None:
         if action_mode not in ACTION_MODES:
             raise SwarmError(f"sim: action_mode {action_mode!r}, expected one of {list(ACTION_MODES)}")
@@ -237,14 +235,20 @@ class SwarmEnv(ParallelEnv):
             setup = MissionSetup(m, plan, dt_s=self.config.dt_s, substep_s=self.config.substep_s)
         self.setup = setup
         self.mission = setup.mission
-        self.world = World(
-            setup,
-            1,
-            comms_period_s=self.config.comms_period_s,
-            max_cycles=max_cycles,
-            sample_tracks=render_mode is not None,
-        )
-        self.run = self.world.runs[0]
+        #: Whether this environment steps its own world (B = 1); one bound to run `run` of a shared
+        #: batch (`swarm.sim.vector_env`) gives the batch's adapter its task hooks and agents only.
+        self.owns_world = world is None
+        if world is None:
+            world = World(
+                setup,
+                1,
+                comms_period_s=self.config.comms_period_s,
+                max_cycles=max_cycles,
+                sample_tracks=render_mode is not None,
+            )
+        self.world = world
+        self.b = run
+        self.run = world.runs[run]
         self.library = setup.library
         self.robot = setup.robot
         self.n = setup.n
@@ -271,10 +275,12 @@ class SwarmEnv(ParallelEnv):
                 }
             )
         self.state_space = gymnasium.spaces.Box(-np.inf, np.inf, (state_size(self.n),), np.float32)
+        self.observer = Observer(setup, self.layout, world.B)
         self._renderer = None
         self.agents: list[str] = []
-        self._reset_state(0)  # arrays exist before the first reset (spaces, render)
-        self.run.seed_seq = None  # ...but an unseeded first reset() draws fresh entropy
+        if self.owns_world:
+            self._reset_state(0)  # arrays exist before the first reset (spaces, render)
+            self.run.seed_seq = None  # ...but an unseeded first reset() draws fresh entropy
 
     # spaces -----------------------------------------------------------------------------------------
     @functools.cache  # noqa: B019 (one space object per agent, as PettingZoo expects)
@@ -291,15 +297,22 @@ class SwarmEnv(ParallelEnv):
 
     # reset ------------------------------------------------------------------------------------------
     def _reset_state(self, seed: int | None) -> None:
-        self.world.reset([seed])
-        n = self.n
-        self._link_keys_version = -1
-        self._nb_signature: tuple[int, int] | None = None
-        self._nb_table = np.full((n, self.layout.neighbours), -1, dtype=np.intp)
-        self._nb_linked = np.zeros((n, self.layout.neighbours), bool)
-        self._link_keys_cache = np.empty(0, dtype=np.int64)
+        if self.owns_world:
+            self.world.reset([seed], runs=[self.b])
+        self.started()
+
+    def started(self) -> None:
+        """The run has just been reset (by this env, or by the batch it is bound to)."""
+        self.observer.reset_run(self.b)
         self.agents = list(self.possible_agents)
-        self._agent_idx = np.arange(n, dtype=np.intp)  # self.agents as indices, in the same order
+        self._agent_idx = np.arange(self.n, dtype=np.intp)  # self.agents as indices, in the same order
+
+    def synced(self) -> None:
+        """The batch this env is bound to has stepped: take the agents that left out."""
+        inside = self.world.in_agents[self.b]
+        if not inside[self._agent_idx].all():
+            self._agent_idx = np.flatnonzero(inside)
+            self.agents = [self.possible_agents[i] for i in self._agent_idx.tolist()]
 
     def reset(self, seed: int | None = None, options: dict | None = None) -> tuple[dict, dict]:
         self.reset_arrays(seed)
@@ -397,6 +410,8 @@ class SwarmEnv(ParallelEnv):
         """One step of the world; returns who the world ended, whether time ran out, the reward."""
         if not self.agents:
             raise SwarmError("sim: step() after the episode ended; call reset()")
+        if not self.owns_world:
+            raise SwarmError("sim: an env bound to a batch's run is stepped by its batch")
         wheels, jet = self._commands(actions)
         ended, time_up, change = self.world.advance(wheels[None], jet[None])
         return ended[0], bool(time_up[0]), float(change[0])
@@ -404,15 +419,12 @@ class SwarmEnv(ParallelEnv):
     def fast_forward(self) -> int:
         """Skip ahead while every robot is off the map (`World.fast_forward`): runners use it
         (`simulate`); `step` never does. Returns the steps skipped."""
-        return self.world.fast_forward(0)
+        return self.world.fast_forward(self.b)
 
     def _finish(self, terminated: np.ndarray, truncate: bool) -> None:
         """End the step: truncate everyone at the time limit, drop finished agents for good."""
         self.world.finish(terminated[None], np.array([truncate]))
-        inside = self.world.in_agents[0]
-        if not inside[self._agent_idx].all():
-            self._agent_idx = np.flatnonzero(inside)
-            self.agents = [self.possible_agents[i] for i in self._agent_idx.tolist()]
+        self.synced()
 
     # actions --------------------------------------------------------------------------------------
     def _commands(self, actions: dict[str, Any] | np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -462,7 +474,7 @@ class SwarmEnv(ParallelEnv):
     def controller_commands(self) -> tuple[np.ndarray, np.ndarray]:
         """Wheel and jet commands for every robot from its command, route and target."""
         wheels, jet = self.world.controller_commands()
-        return wheels[0], jet[0]
+        return wheels[self.b], jet[self.b]
 
     def route_goal(self) -> np.ndarray:
         """(n, 2) the last point of each robot's route (its own position without one)."""
@@ -481,160 +493,8 @@ class SwarmEnv(ParallelEnv):
 
     # observations ------------------------------------------------------------------------------------
     def _observe(self) -> np.ndarray:
-        n, lay = self.n, self.layout
-        out = np.zeros((n, lay.size), np.float32)
-        sl = lay.slices
-        s = self.robot_state
-        heading = s[:, 2]
-        c, si = np.cos(heading), np.sin(heading)
-        own = out[:, sl["own"]]
-        own[:, 0:2] = s[:, :2]
-        own[:, 2] = c
-        own[:, 3] = si
-        own[:, 4:7] = s[:, 3:6]
-        own[:, 7] = self.energy_wh
-        own[:, 8] = self.inverted
-        own[:, 9] = self.submersion
-        own[:, 10] = self.slip
-        np.clip(own[:, 7:8], 0.0, self.mission.hazards.battery.capacity_wh, out=own[:, 7:8])
-        own[:, 7] /= self.mission.hazards.battery.capacity_wh
-        np.clip(own[:, 10], 0.0, 1.0, out=own[:, 10])
-        own[np.arange(n), 11 + self.phase] = 1.0
-        # terrain patch in the body frame: one gather of (speed, elevation) per sample
-        fx, fy = self._patch_offsets
-        c, si = c[:, None], si[:, None]
-        px = s[:, 0:1] + c * fx - si * fy
-        py = s[:, 1:2] + si * fx + c * fy
-        patch = self._patch_grid[self._flat_cell(px, py)]  # (n, k*k, 2)
-        k = lay.patch_size
-        # the middle sample of an odd patch is the robot's own cell
-        mid = patch[:, (k * k) // 2, 1] if k % 2 else None
-        here = mid if mid is not None else self._patch_grid[self._flat_cell(s[:, 0], s[:, 1]), 1]
-        out[:, sl["patch_speed"]] = patch[:, :, 0]
-        np.clip(
-            patch[:, :, 1] - here[:, None],
-            -ELEVATION_CLIP_M,
-            ELEVATION_CLIP_M,
-            out=out[:, sl["patch_elevation"]],
-        )
-        self._observe_neighbours(out[:, sl["neighbours"]])
-        links = out[:, sl["links"]]
-        links[:, 0] = self.links.degree
-        links[:, 1] = self.links.source_hops >= 0
-        links[:, 2] = self.links.source_hops
-        links[:, 3] = self.isolated_s
-        task = out[:, sl["task"]]
-        task[np.arange(n), self.role] = 1.0
-        nr = len(ROLES)
-        goal = np.where(
-            ((self.command == FOLLOW) | (self.command == RETURN))[:, None],
-            self._route_goal(),
-            self.target_m,
-        )
-        gb = to_body(goal - s[:, :2], heading)
-        task[:, nr : nr + 2] = gb
-        task[:, nr + 2] = np.hypot(gb[:, 0], gb[:, 1])
-        task[:, nr + 3] = self.routes.progress()
-        task[:, nr + 4] = self.marking >= 0
-        unmarked = self.object_marker < 0
-        if unmarked.any():
-            objs = self.objects_m[unmarked]
-            j = _nearest(objs, s[:, :2])
-            task[:, nr + 5 : nr + 7] = to_body(objs[j] - s[:, :2], heading)
-        task[:, nr + 7] = min(1.0, self.t_s / self.time_limit_s)
-        if self.clearance is not None and not self.cleared:
-            task[:, nr + 8] = max(0.0, self.clearance.at_s - self.t_s)
-        return out
-
-    @functools.cached_property
-    def _patch_offsets(self) -> tuple[np.ndarray, np.ndarray]:
-        """Body-frame sample offsets of the terrain patch (rows forward, columns left), flattened."""
-        k, h = self.layout.patch_size, self.layout.patch_spacing_m
-        offs = (np.arange(k) - (k - 1) / 2) * h
-        fx, fy = np.meshgrid(offs, offs, indexing="ij")
-        return fx.ravel(), fy.ravel()
-
-    @functools.cached_property
-    def _patch_grid(self) -> np.ndarray:
-        """(cells, 2) float32: speed fraction and elevation of every cell, row-major."""
-        speed = self.setup.speed_grid.ravel()
-        return np.column_stack([speed, self.beach.elevation_m.ravel()]).astype(np.float32)
-
-    def _flat_cell(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
-        """Row-major index of the cell under each point (the nearest edge cell outside the map)."""
-        bm = self.beach
-        rows, cols = bm.shape
-        c = np.clip(((x - bm.origin_m[0]) / bm.cell_m).astype(np.intp), 0, cols - 1)
-        r = np.clip(((y - bm.origin_m[1]) / bm.cell_m).astype(np.intp), 0, rows - 1)
-        return r * cols + c
-
-    def _route_goal(self) -> np.ndarray:
-        """(n, 2) the last point of each robot's route (its own position without one)."""
-        end = np.maximum(self.routes.end - 1, 0)
-        has = self.routes.end > self.routes.start
-        goal = self.robot_state[:, :2].copy()
-        if len(self.routes.points):
-            goal[has] = self.routes.points[end[has]]
-        return goal
-
-    def _neighbour_table(self) -> np.ndarray:
-        """(n, k) ids of each robot's k nearest live robots (-1: none), as of the last radio
-        update or change in who is on the map: the neighbour table its radio keeps."""
-        on = self.alive & self.on_map
-        signature = (self.links_version, int(np.count_nonzero(on)))
-        if self._nb_signature != signature:
-            self._nb_signature = signature
-            live = np.flatnonzero(on)
-            k = self.layout.neighbours
-            table = np.full((self.n, k), -1, dtype=np.intp)
-            q = min(k + 1, len(live))
-            if k and q >= 2:
-                xy = self.robot_state[live, :2]
-                _, idx = cKDTree(xy, balanced_tree=False, compact_nodes=False).query(xy, k=q)
-                table[live, : q - 1] = live[idx[:, 1:]]  # the first is itself
-            self._nb_table = table
-            # which of those links work: fixed until the next radio update, which refreshes the table
-            keys = self._link_keys()
-            query = np.repeat(np.arange(self.n), k).astype(np.int64) * self.links.adjacency.shape[0]
-            query += np.maximum(table, 0).ravel()
-            at = np.minimum(np.searchsorted(keys, query), max(len(keys) - 1, 0))
-            hit = keys[at] == query if len(keys) else np.zeros(len(query), bool)
-            self._nb_linked = hit.reshape(self.n, k) & (table >= 0)
-        return self._nb_table
-
-    def _observe_neighbours(self, block: np.ndarray) -> None:
-        """Each robot's table neighbours at their current positions: present, body-frame offset,
-        distance, radio link working."""
-        k = self.layout.neighbours
-        if k == 0:
-            return
-        table = self._neighbour_table()
-        me = np.flatnonzero((table >= 0).any(axis=1) & self.alive & self.on_map)
-        if not len(me):
-            return
-        other = table[me]
-        present = (other >= 0) & (self.alive & self.on_map)[np.maximum(other, 0)]
-        xy = self.robot_state[me, :2]
-        rel = to_body(self.robot_state[np.maximum(other, 0), :2] - xy[:, None, :], self.robot_state[me, 2])
-        dist = np.hypot(rel[..., 0], rel[..., 1])
-        linked = self._nb_linked[me]
-        view = np.zeros((len(me), k, 5), np.float32)
-        view[..., 0] = present
-        view[..., 1:3] = rel
-        view[..., 3] = dist
-        view[..., 4] = linked
-        view[~present] = 0.0
-        block[me] = view.reshape(len(me), 5 * k)
-
-    def _link_keys(self) -> np.ndarray:
-        """Working links as sorted keys row * N + col (both directions), once per radio update."""
-        if self._link_keys_version != self.links_version:
-            adj = self.links.adjacency.tocsr()
-            adj.sort_indices()
-            rows = np.repeat(np.arange(adj.shape[0], dtype=np.int64), np.diff(adj.indptr))
-            self._link_keys_cache = rows * adj.shape[0] + adj.indices
-            self._link_keys_version = self.links_version
-        return self._link_keys_cache
+        """The default observation (`swarm.sim.observe`), (n, obs_dim)."""
+        return self.observer.observe(self.world, [self.b])[0]
 
     @functools.cached_property
     def _shared_infos(self) -> list[dict]:
@@ -737,13 +597,45 @@ for _name in (
 ):  # fmt: skip
     setattr(SwarmEnv, _name, _delegate_setup(_name))
 SwarmEnv.wave_phase_s = property(lambda self: self.run.wave_phase_s)  # type: ignore[attr-defined]
-SwarmEnv.routes = property(lambda self: self.world.routes)  # type: ignore[attr-defined]
+SwarmEnv.routes = property(  # type: ignore[attr-defined]
+    lambda self: self.world.routes if self.owns_world else self.run.routes
+)
 SwarmEnv.hazard_model = property(lambda self: self.world.hazard_model)  # type: ignore[attr-defined]
 
 
-def _nearest(points: np.ndarray, queries: np.ndarray) -> np.ndarray:
-    """Index of the nearest of `points` to each query: dense for small sets, a k-d tree beyond."""
-    if len(points) * len(queries) <= DENSE_NEAREST_PAIRS:
-        d2 = (queries[:, None, 0] - points[None, :, 0]) ** 2 + (queries[:, None, 1] - points[None, :, 1]) ** 2
-        return np.argmin(d2, axis=1)
-    return cKDTree(points).query(queries)[1]
+def _delegate_run(name: str, robot_array: bool) -> property:
+    def get(self: SwarmEnv) -> Any:
+        return getattr(self.run, name)
+
+    def put(self: SwarmEnv, value: Any) -> None:
+        if robot_array:  # a view of the world's arrays: written in place, never rebound
+            getattr(self.run, name)[...] = value
+        else:
+            setattr(self.run, name, value)
+
+    return property(get, put, doc=f"The run's `{name}` (`swarm.sim.runview.RunView`).")
+
+
+def _delegate_setup(name: str) -> property:
+    return property(lambda self: getattr(self.setup, name), doc=f"`MissionSetup.{name}`.")
+
+
+for _name in ROBOT_ARRAYS:
+    setattr(SwarmEnv, _name, _delegate_run(_name, True))
+for _name in (
+    "t_s", "steps", "events", "minefield", "objects_m", "object_mine", "object_marker", "links",
+    "links_version", "relay_up", "score", "cleared", "tracks", "end_reason", "rngs", "seed",
+    "sensor", "radio_net", "hidden_rocks_m", "router",
+):  # fmt: skip
+    setattr(SwarmEnv, _name, _delegate_run(_name, False))
+for _name in (
+    "plan", "beach", "limits", "radio", "fixed_m", "fixed_height_m", "search_task", "clearance",
+    "relay_task", "release_s", "arrive_s", "launch_m", "entry_m", "plan_role", "on_beach_launch",
+    "swim_power_w", "pickup_m", "physics", "sea", "time_limit_s", "dry_ground",
+):  # fmt: skip
+    setattr(SwarmEnv, _name, _delegate_setup(_name))
+SwarmEnv.wave_phase_s = property(lambda self: self.run.wave_phase_s)  # type: ignore[attr-defined]
+SwarmEnv.routes = property(  # type: ignore[attr-defined]
+    lambda self: self.world.routes if self.owns_world else self.run.routes
+)
+SwarmEnv.hazard_model = property(lambda self: self.world.hazard_model)  # type: ignore[attr-defined]

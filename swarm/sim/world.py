@@ -127,6 +127,7 @@ class World:
         self.marking = np.full((b, n), -1, dtype=np.int64)  # object index a robot marks
         self.role = np.tile(setup.plan_role, (b, 1))
         self.link_degree = np.zeros((b, n), dtype=np.intp)
+        self.source_hops = np.full((b, n), -1, dtype=np.intp)
         self.pending_terminated = np.zeros((b, n), bool)
         self.in_agents = np.zeros((b, n), bool)  # robots still in their episode
         self.t_s = np.zeros(b)
@@ -241,6 +242,7 @@ class World:
         run.object_marker = np.empty(0, dtype=np.int64)
         run.links = run.radio_net.update(state[:, :2], np.zeros(n, bool), run.rngs["radio"])
         self.link_degree[b] = run.links.degree
+        self.source_hops[b] = run.links.source_hops
         run.next_comms_s = 0.0
         run.links_version = 0
         run.relay_up = None
@@ -551,6 +553,7 @@ class World:
             up = self.alive[b] & self.on_map[b] & self.radio_ok[b] & (not jammed)
             run.links = run.radio_net.update(self.robot_state[b, :, :2], up, run.rngs["radio"])
             self.link_degree[b] = run.links.degree
+            self.source_hops[b] = run.links.source_hops
             run.links_version += 1
             if s.relay_task is not None:
                 now = bool(run.links.fixed_linked(s.relay_task.redundancy))
