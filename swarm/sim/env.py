@@ -1,4 +1,6 @@
-"""`SwarmEnv`: the mission as a PettingZoo `ParallelEnv`.
+"""`SwarmEnv`: the mission as a PettingZoo `ParallelEnv`, the adapter over one run of the batched
+world core (`swarm.sim.world.World` with B = 1; or, for `swarm.sim.vector_env`, one run of a
+shared batch, whose task hooks and agents it gives).
 
 ```python
 import swarm.sim
