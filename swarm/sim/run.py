@@ -224,11 +224,20 @@ class _Recorder:
         self.role.append(run.role.astype(np.int8))
 
 
+#: What the log records of each loss (`MissionLog.losses`), from its "loss" event.
+LOSS_FIELDS = ("robot", "cause", "phase", "t_s", "x_m", "y_m")
+
+
+def losses_of(events: list[dict]) -> list[dict]:
+    """The log's losses: one record per "loss" event, `LOSS_FIELDS` (the one place they are made,
+    for a run just simulated and for a log read back)."""
+    return [{key: ev[key] for key in LOSS_FIELDS} for ev in events if ev.get("kind") == "loss"]
+
+
 def _log(run: RunView, mission: Mission, seed: int, rec: _Recorder, completed_s: float | None) -> MissionLog:
     """The finished run's log: its samples, events, outcome and losses."""
     n, k = run.n, len(rec.times)
-    keys = ("robot", "cause", "phase", "t_s", "x_m", "y_m")
-    losses = [{key: ev[key] for key in keys} for ev in run.events if ev["kind"] == "loss"]
+    losses = losses_of(run.events)
     mf = run.minefield
     return MissionLog(
         mission=mission.name or "mission",
@@ -350,11 +359,7 @@ def read_log(out_dir: str | Path, plan: MissionPlan | None = None) -> MissionLog
             phase=arrays["phase"].reshape(len(times), n),
             events=events,
             outcome={"success": bool(summary["success"]), "criteria": summary["criteria"]},
-            losses=[
-                {k: ev[k] for k in ("robot", "cause", "phase", "t_s", "x_m", "y_m")}
-                for ev in events
-                if ev.get("kind") == "loss"
-            ],
+            losses=losses_of(events),
             mines_m=arrays["mines_m"].reshape(-1, 2),
             mines_state={k: list(v) for k, v in (summary.get("mines_state") or {}).items()},
             objects_m=arrays["objects_m"].reshape(-1, 2),

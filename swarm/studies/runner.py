@@ -24,7 +24,7 @@ from functools import lru_cache
 import numpy as np
 
 from swarm.sim.hazards import CAUSES
-from swarm.studies.table import CRITERIA
+from swarm.studies.table import CRITERIA, loss_row
 
 #: Points whose mission and plan a worker keeps.
 PREPARED_CACHE = 16
@@ -113,16 +113,7 @@ def _row(task: RunTask, mission, log, runtime_s: float) -> dict:
     row["lost"] = len(log.losses)
     for c in CAUSES:
         row[f"lost_{c}"] = causes.get(c, 0)
-    row["losses"] = [
-        {
-            "cause": x["cause"],
-            "phase": x["phase"],
-            "t_s": float(x["t_s"]),
-            "x_m": float(x["x_m"]),
-            "y_m": float(x["y_m"]),
-        }
-        for x in log.losses
-    ]
+    row["losses"] = [loss_row(x) for x in log.losses]
     row["completed_s"] = None if log.completed_s is None else float(log.completed_s)
     row["duration_s"] = float(log.times_s[-1]) if len(log.times_s) else 0.0
     row["runtime_s"] = runtime_s

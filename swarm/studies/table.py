@@ -43,6 +43,18 @@ LOSS = pa.struct(
 VOLATILE = ("runtime_s",)
 
 
+def loss_row(loss: dict) -> dict:
+    """A loss of the log (`swarm.sim.run.LOSS_FIELDS`) as the table's `losses` holds it: cause,
+    phase, time and place (the robot's name is not kept)."""
+    return {
+        "cause": loss["cause"],
+        "phase": loss["phase"],
+        "t_s": float(loss["t_s"]),
+        "x_m": float(loss["x_m"]),
+        "y_m": float(loss["y_m"]),
+    }
+
+
 def schema(sweep_types: Sequence[tuple[str, pa.DataType]]) -> pa.Schema:
     """The table's schema for a study sweeping these (key, type) pairs."""
     fields = [pa.field("point", pa.int32()), pa.field("run", pa.int32()), pa.field("seed", pa.uint64())]
