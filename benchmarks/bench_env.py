@@ -31,6 +31,9 @@ process with it first on the path: before the batched core, the vector env loope
 on one core (`benchmarks/peer_jaxmarl.py`, run by PY, a Python with jaxmarl installed; JaxMARL is
 not a dependency). `--vector-only` skips the MPE table (which needs the `bench` extra).
 
+`--adapter-only --today-ref REF`: the PettingZoo adapter at `--counts`, the code of git commit REF
+against this code, alternately `--repeat` times (issue 13: no slower than today at 100 and 1000).
+
 Then (unless --no-breakdown), where our step's time goes at 100 robots and at the largest count:
 timers wrapped around the environment's internals for a separate run (so they do not slow the rates
 above).
@@ -186,6 +189,68 @@ def today_vector_rate(src: Path, b: int, n: int, steps: int, warmup: int, box_s:
         env=env,
     )
     return float(out.stdout.strip().splitlines()[-1])
+
+
+#: `ours_rate` of another checkout, in a fresh process (`--today-ref`): prints agent-steps/s.
+TODAY_PZ = """
+import sys, time
+import numpy as np
+import swarm.sim
+mission = sys.argv[1]
+n, steps, warmup = (int(v) for v in sys.argv[2:5])
+box_s, seed = float(sys.argv[5]), int(sys.argv[6])
+env = swarm.sim.parallel_env(mission=mission, overrides={"swarm.count": n}, action_mode="wheels")
+env.reset(seed=0)
+rng = np.random.default_rng(seed)
+a = rng.uniform(-1.0, 1.0, (steps + warmup, len(env.possible_agents), 3)).astype(np.float32)
+acts = [dict(zip(env.possible_agents, a[k], strict=True)) for k in range(steps + warmup)]
+for k in range(warmup):
+    env.step({x: acts[k][x] for x in env.agents})
+done, seconds, agent_steps = 0, 0.0, 0
+while done < steps and (done == 0 or seconds < box_s) and env.agents:
+    step = {x: acts[warmup + done][x] for x in env.agents}
+    live = len(step)
+    t0 = time.perf_counter()
+    env.step(step)
+    seconds += time.perf_counter() - t0
+    done += 1
+    agent_steps += live
+print(agent_steps / seconds)
+"""
+
+
+def today_adapter_rate(src: Path, n: int, steps: int, warmup: int, box_s: float, seed: int) -> float:
+    """The PettingZoo adapter's agent-steps/s in the code exported to `src`, in a fresh process."""
+    args = [str(MISSION), str(n), str(steps), str(warmup), str(box_s), str(seed)]
+    env = dict(os.environ, PYTHONPATH=str(src))
+    out = subprocess.run(
+        [sys.executable, "-c", TODAY_PZ, *args], capture_output=True, text=True, check=True, cwd=src, env=env
+    )
+    return float(out.stdout.strip().splitlines()[-1])
+
+
+def adapter_table(
+    counts: list[int], steps: int, warmup: int, box_s: float, seed: int, ref: str, repeat: int
+) -> None:
+    """The PettingZoo adapter (`SwarmEnv.step`, dicts) today (git `ref`) and now, alternately."""
+    header = f"{'agents':>6} | {'today agent-steps/s':>19} {'now agent-steps/s':>17} | {'now / today':>11}"
+    print(header)
+    print("-" * len(header))
+    with tempfile.TemporaryDirectory(prefix="bench_env-today-") as tmp:
+        src = Path(tmp)
+        archive = subprocess.run(["git", "archive", ref], cwd=ROOT, capture_output=True, check=True)
+        subprocess.run(["tar", "-x", "-C", str(src)], input=archive.stdout, check=True)
+        for n in counts:
+            old, new = [], []
+            for _ in range(repeat):
+                old.append(today_adapter_rate(src, n, steps, warmup, box_s, seed))
+                new.append(ours_rate(n, steps, warmup, box_s, seed).per_s)
+            print(
+                f"{n:>6} | {max(old):>19,.0f} {max(new):>17,.0f} | {max(new) / max(old):>10.2f}x"
+                f"   (each the best of {repeat}, alternating)",
+                flush=True,
+            )
+    print(f"today: git {ref}, the same method in a fresh process; target: now >= today at 100 and 1000")
 
 
 def jaxmarl_rates(python: str, batches: list[tuple[int, int]], steps: int, box_s: float, seed: int) -> dict:
@@ -385,6 +450,12 @@ def main(argv: list[str] | None = None) -> None:
     )
     ap.add_argument("--vector-only", action="store_true", help="only the vector env table (no MPE)")
     ap.add_argument("--today-ref", help="also the vector env of this git commit (today's)")
+    ap.add_argument(
+        "--adapter-only",
+        action="store_true",
+        help="only the PettingZoo adapter at --counts, today (--today-ref) and now, alternately",
+    )
+    ap.add_argument("--repeat", type=int, default=3, help="--adapter-only: alternations")
     ap.add_argument("--jaxmarl-python", help="a Python with jaxmarl: JaxMARL's MPE beside the vector env")
     args = ap.parse_args(argv)
     batches = [tuple(int(v) for v in spec.lower().split("x")) for spec in args.batches]
@@ -395,6 +466,13 @@ def main(argv: list[str] | None = None) -> None:
     )
     print(f"up to {args.steps} timed steps after {args.warmup} warm-up steps, {args.box_s:g} s time box each")
     print()
+    if args.adapter_only:
+        if not args.today_ref:
+            ap.error("--adapter-only needs --today-ref")
+        adapter_table(
+            args.counts, args.steps, args.warmup, args.box_s, args.seed, args.today_ref, args.repeat
+        )
+        return
     if batches:
         vector_table(
             batches,  # type: ignore[arg-type]

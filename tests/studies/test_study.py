@@ -252,6 +252,17 @@ def test_a_bad_sweep_is_one_line_naming_the_key(tiny, tmp_path, sweep, names) ->
     assert not out.exists()  # nothing written
 
 
+def test_a_bad_batch_is_one_line_and_a_good_one_runs_in_batches(tiny, tmp_path) -> None:
+    err = io.StringIO()
+    with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
+        code = main(["study", str(tiny), "--runs", "2", "--batch", "0", "--out", str(tmp_path / "bad")])
+    assert code == 2 and "--batch" in err.getvalue() and len(err.getvalue().strip().splitlines()) == 1
+    out = tmp_path / "good"
+    with contextlib.redirect_stderr(io.StringIO()), contextlib.redirect_stdout(io.StringIO()):
+        code = main(["study", str(tiny), "--runs", "2", "--batch", "2", "--workers", "1", "--out", str(out)])
+    assert code == 0 and pq.read_table(out / "results.parquet").num_rows == 2
+
+
 @pytest.mark.slow
 def test_a_failed_row_replays_with_swarm_simulate(tmp_path, capsys) -> None:
     """`swarm simulate MISSION --seed <row seed> --set <row's swept values>` reproduces the run of a
