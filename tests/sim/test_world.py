@@ -96,7 +96,14 @@ def test_the_runs_are_busy_enough_to_tell(alone) -> None:
     assert len({len(log.events) for log in alone.values()}) == len(SEEDS)
 
 
-@pytest.mark.parametrize("order", [SEEDS, [*SEEDS[::-1], SEEDS[1]], [SEEDS[2]]])
+@pytest.mark.parametrize(
+    "order",
+    [
+        SEEDS,
+        pytest.param([*SEEDS[::-1], SEEDS[1]], marks=pytest.mark.slow),  # reordered, a seed twice
+        pytest.param([SEEDS[2]], marks=pytest.mark.slow),  # a batch of one
+    ],
+)
 def test_a_run_is_the_same_alone_and_in_a_batch_of_any_size(mission_and_plan, alone, order) -> None:
     mission, plan = mission_and_plan
     logs = simulate_batch(mission, order, plan=plan)
