@@ -299,6 +299,8 @@ class SwarmEnv(ParallelEnv):
 
     # reset ------------------------------------------------------------------------------------------
     def _reset_state(self, seed: int | None) -> None:
+        """Reset the run with `seed`; an env bound to a batch's run is reset by its batch (which
+        has just reset the run with that seed) and only starts its agents over."""
         if self.owns_world:
             self.world.reset([seed], runs=[self.b])
         self.started()

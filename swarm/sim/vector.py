@@ -149,7 +149,8 @@ class SwarmVectorEnv:
 
     def _reset_runs(self, runs: list[int]) -> np.ndarray:
         """Start runs `runs` on their next episodes; returns their observations (len(runs), n,
-        obs_dim), raw."""
+        obs_dim), raw. The world's runs are reset together, then each run's env through its own
+        `reset_arrays` (a subclass that keeps state of its own resets it there, as alone)."""
         assert self._root is not None
         seeds = []
         for b in runs:
@@ -158,13 +159,14 @@ class SwarmVectorEnv:
             self._seeds[b] = s
             seeds.append(s)
         self.world.reset(seeds, runs=runs)
-        for b in runs:
-            self.envs[b].started()
+        obs = []
+        for b, s in zip(runs, seeds, strict=True):
+            obs.append(self.envs[b].reset_arrays(s))
             self.observer.reset_run(b)
             self._active[b] = self.world.in_agents[b]
             self._returns[b] = 0.0
             self._lengths[b] = 0
-        return self._observe(runs)
+        return np.stack(obs)
 
     def _observe(self, runs: list[int]) -> np.ndarray:
         """The task's observations of runs `runs` (len(runs), n, obs_dim), raw."""
