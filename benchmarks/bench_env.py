@@ -176,18 +176,37 @@ print(agent_steps / seconds)
 """
 
 
+#: The most memory a measurement of another checkout may take, as a share of what is available
+#: when it starts: past it the measurement fails (MemoryError) rather than call the kernel's
+#: out-of-memory killer onto the machine (the vector env before the batched core held B whole
+#: SwarmEnvs: 1000 x 10 wanted about 20 GB).
+TODAY_MEMORY_SHARE = 0.5
+
+
+def _memory_cap() -> None:
+    import resource
+
+    from swarm.sim.memory import available_bytes
+
+    free = available_bytes()
+    if free:
+        cap = int(free * TODAY_MEMORY_SHARE)
+        resource.setrlimit(resource.RLIMIT_AS, (cap, cap))
+
+
 def today_vector_rate(src: Path, b: int, n: int, steps: int, warmup: int, box_s: float, seed: int) -> float:
-    """`vector_rate` of the code exported to `src`, in a fresh process."""
+    """`vector_rate` of the code exported to `src`, in a fresh process (nan if it failed, e.g.
+    out of its memory cap)."""
     args = [str(MISSION), str(b), str(n), str(steps), str(warmup), str(box_s), str(seed)]
     env = dict(os.environ, PYTHONPATH=str(src))
     out = subprocess.run(
         [sys.executable, "-c", TODAY_VECTOR, *args],
-        capture_output=True,
-        text=True,
-        check=True,
-        cwd=src,
-        env=env,
-    )
+        capture_output=True, text=True, cwd=src, env=env, preexec_fn=_memory_cap,
+    )  # fmt: skip
+    if out.returncode != 0:
+        last = (out.stderr.strip().splitlines() or ["?"])[-1]
+        print(f"  today at {b} x {n} failed: {last[:120]}", flush=True)
+        return float("nan")
     return float(out.stdout.strip().splitlines()[-1])
 
 
@@ -224,8 +243,9 @@ def today_adapter_rate(src: Path, n: int, steps: int, warmup: int, box_s: float,
     args = [str(MISSION), str(n), str(steps), str(warmup), str(box_s), str(seed)]
     env = dict(os.environ, PYTHONPATH=str(src))
     out = subprocess.run(
-        [sys.executable, "-c", TODAY_PZ, *args], capture_output=True, text=True, check=True, cwd=src, env=env
-    )
+        [sys.executable, "-c", TODAY_PZ, *args],
+        capture_output=True, text=True, check=True, cwd=src, env=env, preexec_fn=_memory_cap,
+    )  # fmt: skip
     return float(out.stdout.strip().splitlines()[-1])
 
 

@@ -242,6 +242,9 @@ class _ContactScreen:
             at += len(ix.grid)
         self.grid = np.concatenate(grids) if grids else np.zeros(0, bool)
         self.empty = not grids
+        for b, ix in enumerate(indexes):  # one copy of each grid: the index's is a view of ours
+            if ix.tree is not None:
+                ix.grid = self.grid[self.offset[b] : self.offset[b] + len(ix.grid)]
 
     def screen(self, xy: np.ndarray, mask: np.ndarray, run: np.ndarray) -> np.ndarray:
         """Indices where `mask` of the robots in a flagged cell of their run's grid (`run` (n,))."""

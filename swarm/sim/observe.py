@@ -52,11 +52,17 @@ class Observer:
         self.patch_grid = np.column_stack([setup.speed_grid.ravel(), bm.elevation_m.ravel()]).astype(
             np.float32
         )
-        self._nb = [_Neighbours(self.n, layout.neighbours) for _ in range(runs)]
+        self._nb: dict[int, _Neighbours] = {}  # per observed run, made when first needed
 
     def reset_run(self, b: int) -> None:
         """Forget run b's neighbour tables (a new episode)."""
-        self._nb[b] = _Neighbours(self.n, self.layout.neighbours)
+        self._nb.pop(b, None)
+
+    def _neighbours_of(self, b: int) -> _Neighbours:
+        nb = self._nb.get(b)
+        if nb is None:
+            nb = self._nb[b] = _Neighbours(self.n, self.layout.neighbours)
+        return nb
 
     def flat_cell(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
         """Row-major index of the cell under each point (the nearest edge cell outside the map)."""
@@ -136,7 +142,7 @@ class Observer:
         for j, b in enumerate(runs):
             run = world.runs[b]
             rows_b = slice(j * n, (j + 1) * n)
-            self._observe_neighbours(run, self._nb[b], out[rows_b, sl["neighbours"]])
+            self._observe_neighbours(run, self._neighbours_of(b), out[rows_b, sl["neighbours"]])
             unmarked = run.object_marker < 0
             if unmarked.any():
                 objs = run.objects_m[unmarked]

@@ -87,9 +87,14 @@ class SensorBatch:
         positions, which this moves on); `t_s` (B,) each run's time, `rngs[b]` its sensing
         stream. Returns each run's reports (mines found, then false alarms), as `update`."""
         n = self.n
+        out: dict[int, list[Detection]] = {}
+        if self.runs == 1:  # one run: its sensor's own update, nothing to share
+            s = self.sensors[0]
+            if s is not None and runs:
+                out[0] = s.update(xy, sensing, distance_m, float(t_s[0]), rngs[0], alive=alive)
+            return out
         if self._dirty.any():
             self._refresh()
-        out: dict[int, list[Detection]] = {}
         who = np.flatnonzero(sensing)
         run = who // n if self.runs > 1 else np.zeros(len(who), np.intp)
         in_bins = np.zeros(len(who), bool)

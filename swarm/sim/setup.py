@@ -132,6 +132,12 @@ class MissionSetup:
         return wp, track_from
 
     @functools.cached_property
+    def patch_grid(self) -> np.ndarray:
+        """(cells, 2) float32: speed fraction and elevation of every cell, row-major (the terrain
+        patch of the observation samples it; one copy for every run and adapter)."""
+        return np.column_stack([self.speed_grid.ravel(), self.beach.elevation_m.ravel()]).astype(np.float32)
+
+    @functools.cached_property
     def dry_ground(self) -> np.ndarray:
         """(rows, cols) bool: free cells at least `MUSTER_FROM_WATER_M` from any water, where robots
         wait out of the surf (a robot waiting in the breakers is rolled over again and again)."""
