@@ -2,7 +2,7 @@
 agent counts.
 
     python benchmarks/bench_env.py [--counts 10 100 1000] [--steps 200] [--box-s 15] [--no-breakdown]
-        [--batches 10x10 10x100 10x1000] [--vector-only]
+        [--batches 1000x10 100x100 10x1000] [--vector-only] [--today-ref REF] [--jaxmarl-python PY]
 
 Our side: `benchmarks/missions/beach_swarm.yaml`, a swarm already on the beach of gentle_fine
 searching it for mines (no sea transit), the count set per run with overrides={"swarm.count": n},
@@ -24,9 +24,15 @@ Targets: at least 100x MPE's agent-steps/s at 100 agents, and at least 200,000 a
 The batched environment (`swarm.sim.vector_env`, `--batches BxN`): B runs of N robots of the same
 mission, random actions (B, N, 3) drawn beforehand, agent-steps = robots in the mission summed over
 the timed steps; next to it the PettingZoo adapter (`SwarmEnv.step`, dicts) on one run of N robots,
-the same method. Issue 13's target: 2 M agent-steps/s at B x N = 10,000 robots (today's vector env
-loops over B `SwarmEnv`s; the batched core replaces the loop). `--vector-only` skips the MPE table
-(which needs the `bench` extra).
+the same method. Issue 13's target: 2 M agent-steps/s at B x N = 10,000 robots. Beside it, with
+`--today-ref REF`, the same measurement on the code of git commit REF (`git archive`, a fresh
+process with it first on the path: before the batched core, the vector env looped over B
+`SwarmEnv`s), and with `--jaxmarl-python PY` JaxMARL's MPE `simple_spread_v3` at the same B and N
+on one core (`benchmarks/peer_jaxmarl.py`, run by PY, a Python with jaxmarl installed; JaxMARL is
+not a dependency). `--vector-only` skips the MPE table (which needs the `bench` extra).
+
+`--adapter-only --today-ref REF`: the PettingZoo adapter at `--counts`, the code of git commit REF
+against this code, alternately `--repeat` times (issue 13: no slower than today at 100 and 1000).
 
 Then (unless --no-breakdown), where our step's time goes at 100 robots and at the largest count:
 timers wrapped around the environment's internals for a separate run (so they do not slow the rates
@@ -40,9 +46,13 @@ import argparse
 import cProfile
 import functools
 import io
+import json
 import os
 import platform
 import pstats
+import subprocess
+import sys
+import tempfile
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -55,6 +65,7 @@ import swarm.sim
 from swarm.sim.env import SwarmEnv
 
 MISSION = Path(__file__).resolve().parent / "missions" / "beach_swarm.yaml"
+ROOT = Path(__file__).resolve().parents[1]
 #: The targets: ratio to MPE at 100 agents, our absolute rate at 1000 robots.
 TARGET_RATIO_AT_100 = 100.0
 TARGET_RATE_AT_1000 = 200_000.0
@@ -135,22 +146,198 @@ def vector_rate(b: int, n: int, steps: int, warmup: int, box_s: float, seed: int
     return Rate(agent_steps, done, seconds)
 
 
-def vector_table(batches: list[tuple[int, int]], steps: int, warmup: int, box_s: float, seed: int) -> None:
+#: `vector_rate` of another checkout, in a fresh process (`--today-ref`): prints agent-steps/s.
+TODAY_VECTOR = """
+import sys, time
+import numpy as np
+import swarm.sim
+mission = sys.argv[1]
+b, n, steps, warmup = (int(v) for v in sys.argv[2:6])
+box_s, seed = float(sys.argv[6]), int(sys.argv[7])
+vec = swarm.sim.vector_env(
+    mission=mission, num_envs=b, overrides={"swarm.count": n}, action_mode="wheels", seed=0
+)
+_, infos = vec.reset()
+rng = np.random.default_rng(seed)
+actions = rng.uniform(-1.0, 1.0, (min(steps + warmup, 20), b, n, 3)).astype(np.float32)
+mask = infos["agent_mask"]
+for k in range(warmup):
+    mask = vec.step(actions[k % len(actions)])[4]["agent_mask"]
+done, seconds, agent_steps = 0, 0.0, 0
+while done < steps and (done == 0 or seconds < box_s):
+    live = int(mask.sum())
+    t0 = time.perf_counter()
+    infos = vec.step(actions[(warmup + done) % len(actions)])[4]
+    seconds += time.perf_counter() - t0
+    mask = infos["agent_mask"]
+    done += 1
+    agent_steps += live
+print(agent_steps / seconds)
+"""
+
+
+#: The most memory a measurement of another checkout may take, as a share of what is available
+#: when it starts: past it the measurement fails (MemoryError) rather than call the kernel's
+#: out-of-memory killer onto the machine (the vector env before the batched core held B whole
+#: SwarmEnvs: 1000 x 10 wanted about 20 GB).
+TODAY_MEMORY_SHARE = 0.5
+
+
+def _memory_cap() -> None:
+    import resource
+
+    from swarm.sim.memory import available_bytes
+
+    free = available_bytes()
+    if free:
+        cap = int(free * TODAY_MEMORY_SHARE)
+        resource.setrlimit(resource.RLIMIT_AS, (cap, cap))
+
+
+def today_vector_rate(src: Path, b: int, n: int, steps: int, warmup: int, box_s: float, seed: int) -> float:
+    """`vector_rate` of the code exported to `src`, in a fresh process (nan if it failed, e.g.
+    out of its memory cap)."""
+    args = [str(MISSION), str(b), str(n), str(steps), str(warmup), str(box_s), str(seed)]
+    env = dict(os.environ, PYTHONPATH=str(src))
+    out = subprocess.run(
+        [sys.executable, "-c", TODAY_VECTOR, *args],
+        capture_output=True, text=True, cwd=src, env=env, preexec_fn=_memory_cap,
+    )  # fmt: skip
+    if out.returncode != 0:
+        last = (out.stderr.strip().splitlines() or ["?"])[-1]
+        print(f"  today at {b} x {n} failed: {last[:120]}", flush=True)
+        return float("nan")
+    return float(out.stdout.strip().splitlines()[-1])
+
+
+#: `ours_rate` of another checkout, in a fresh process (`--today-ref`): prints agent-steps/s.
+TODAY_PZ = """
+import sys, time
+import numpy as np
+import swarm.sim
+mission = sys.argv[1]
+n, steps, warmup = (int(v) for v in sys.argv[2:5])
+box_s, seed = float(sys.argv[5]), int(sys.argv[6])
+env = swarm.sim.parallel_env(mission=mission, overrides={"swarm.count": n}, action_mode="wheels")
+env.reset(seed=0)
+rng = np.random.default_rng(seed)
+a = rng.uniform(-1.0, 1.0, (steps + warmup, len(env.possible_agents), 3)).astype(np.float32)
+acts = [dict(zip(env.possible_agents, a[k], strict=True)) for k in range(steps + warmup)]
+for k in range(warmup):
+    env.step({x: acts[k][x] for x in env.agents})
+done, seconds, agent_steps = 0, 0.0, 0
+while done < steps and (done == 0 or seconds < box_s) and env.agents:
+    step = {x: acts[warmup + done][x] for x in env.agents}
+    live = len(step)
+    t0 = time.perf_counter()
+    env.step(step)
+    seconds += time.perf_counter() - t0
+    done += 1
+    agent_steps += live
+print(agent_steps / seconds)
+"""
+
+
+def today_adapter_rate(src: Path, n: int, steps: int, warmup: int, box_s: float, seed: int) -> float:
+    """The PettingZoo adapter's agent-steps/s in the code exported to `src`, in a fresh process."""
+    args = [str(MISSION), str(n), str(steps), str(warmup), str(box_s), str(seed)]
+    env = dict(os.environ, PYTHONPATH=str(src))
+    out = subprocess.run(
+        [sys.executable, "-c", TODAY_PZ, *args],
+        capture_output=True, text=True, check=True, cwd=src, env=env, preexec_fn=_memory_cap,
+    )  # fmt: skip
+    return float(out.stdout.strip().splitlines()[-1])
+
+
+def adapter_table(
+    counts: list[int], steps: int, warmup: int, box_s: float, seed: int, ref: str, repeat: int
+) -> None:
+    """The PettingZoo adapter (`SwarmEnv.step`, dicts) today (git `ref`) and now, alternately."""
+    header = f"{'agents':>6} | {'today agent-steps/s':>19} {'now agent-steps/s':>17} | {'now / today':>11}"
+    print(header)
+    print("-" * len(header))
+    with tempfile.TemporaryDirectory(prefix="bench_env-today-") as tmp:
+        src = Path(tmp)
+        archive = subprocess.run(["git", "archive", ref], cwd=ROOT, capture_output=True, check=True)
+        subprocess.run(["tar", "-x", "-C", str(src)], input=archive.stdout, check=True)
+        for n in counts:
+            old, new = [], []
+            for _ in range(repeat):
+                old.append(today_adapter_rate(src, n, steps, warmup, box_s, seed))
+                new.append(ours_rate(n, steps, warmup, box_s, seed).per_s)
+            print(
+                f"{n:>6} | {max(old):>19,.0f} {max(new):>17,.0f} | {max(new) / max(old):>10.2f}x"
+                f"   (each the best of {repeat}, alternating)",
+                flush=True,
+            )
+    print(f"today: git {ref}, the same method in a fresh process; target: now >= today at 100 and 1000")
+
+
+def jaxmarl_rates(python: str, batches: list[tuple[int, int]], steps: int, box_s: float, seed: int) -> dict:
+    """JaxMARL's MPE at each (B, N), from `peer_jaxmarl.py` run by `python`: {(B, N): agent-steps/s}."""
+    script = Path(__file__).resolve().parent / "peer_jaxmarl.py"
+    configs = [f"{b}x{n}" for b, n in batches]
+    cmd = [
+        python,
+        str(script),
+        *configs,
+        "--steps",
+        str(min(steps, 50)),
+        "--box-s",
+        str(box_s),
+        "--seed",
+        str(seed),
+    ]
+    out = subprocess.run(cmd, capture_output=True, text=True, check=True)
+    rows = [json.loads(line) for line in out.stdout.splitlines() if line.startswith("{")]
+    return {(r["B"], r["N"]): r["agent_steps_per_s"] for r in rows}
+
+
+def vector_table(
+    batches: list[tuple[int, int]],
+    steps: int,
+    warmup: int,
+    box_s: float,
+    seed: int,
+    today_ref: str | None = None,
+    jaxmarl_python: str | None = None,
+) -> None:
+    peer = jaxmarl_rates(jaxmarl_python, batches, steps, box_s, seed) if jaxmarl_python else {}
     header = (
         f"{'B x N':>11} {'robots':>7} | {'vector steps':>12} {'agent-steps/s':>14} {'ms/step':>8} | "
         f"{'PZ (N) steps':>12} {'agent-steps/s':>14} {'ms/step':>8} | {'vs 2M':>6}"
     )
+    if today_ref:
+        header += f" | {'today':>12} {'x today':>8}"
+    if jaxmarl_python:
+        header += f" | {'JaxMARL MPE':>12} {'x JaxMARL':>9}"
     print(header)
     print("-" * len(header))
-    for b, n in batches:
-        vec = vector_rate(b, n, steps, warmup, box_s, seed)
-        pz = ours_rate(n, steps, warmup, box_s, seed)
-        share = vec.per_s / TARGET_VECTOR_RATE
-        print(
-            f"{f'{b} x {n}':>11} {b * n:>7} | {vec.steps:>12} {vec.per_s:>14,.0f} {vec.ms_per_step:>8.2f} | "
-            f"{pz.steps:>12} {pz.per_s:>14,.0f} {pz.ms_per_step:>8.2f} | {share:>6.1%}",
-            flush=True,
-        )
+    with tempfile.TemporaryDirectory(prefix="bench_env-today-") as tmp:
+        src = Path(tmp)
+        if today_ref:
+            archive = subprocess.run(["git", "archive", today_ref], cwd=ROOT, capture_output=True, check=True)
+            subprocess.run(["tar", "-x", "-C", str(src)], input=archive.stdout, check=True)
+        for b, n in batches:
+            vec = vector_rate(b, n, steps, warmup, box_s, seed)
+            pz = ours_rate(n, steps, warmup, box_s, seed)
+            share = vec.per_s / TARGET_VECTOR_RATE
+            line = (
+                f"{f'{b} x {n}':>11} {b * n:>7} | {vec.steps:>12} {vec.per_s:>14,.0f} "
+                f"{vec.ms_per_step:>8.2f} | {pz.steps:>12} {pz.per_s:>14,.0f} {pz.ms_per_step:>8.2f} | "
+                f"{share:>6.1%}"
+            )
+            if today_ref:
+                old = today_vector_rate(src, b, n, steps, warmup, box_s, seed)
+                line += f" | {old:>12,.0f} {vec.per_s / old:>7.1f}x"
+            if jaxmarl_python:
+                mpe = peer.get((b, n), float("nan"))
+                line += f" | {mpe:>12,.0f} {vec.per_s / mpe:>8.1f}x"
+            print(line, flush=True)
+    if today_ref:
+        print(f"today: the vector env of git {today_ref}, the same method in a fresh process")
+    if jaxmarl_python:
+        print("JaxMARL MPE: simple_spread_v3, B envs of N agents, vmap + jit, continuous actions, one core")
 
 
 def make_ours(n: int) -> SwarmEnv:
@@ -279,9 +466,17 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--no-breakdown", action="store_true")
     ap.add_argument("--profile", action="store_true", help="cProfile instead of the timers")
     ap.add_argument(
-        "--batches", nargs="+", default=["10x10", "10x100", "10x1000"], help="vector_env runs x robots"
+        "--batches", nargs="+", default=["1000x10", "100x100", "10x1000"], help="vector_env runs x robots"
     )
     ap.add_argument("--vector-only", action="store_true", help="only the vector env table (no MPE)")
+    ap.add_argument("--today-ref", help="also the vector env of this git commit (today's)")
+    ap.add_argument(
+        "--adapter-only",
+        action="store_true",
+        help="only the PettingZoo adapter at --counts, today (--today-ref) and now, alternately",
+    )
+    ap.add_argument("--repeat", type=int, default=3, help="--adapter-only: alternations")
+    ap.add_argument("--jaxmarl-python", help="a Python with jaxmarl: JaxMARL's MPE beside the vector env")
     args = ap.parse_args(argv)
     batches = [tuple(int(v) for v in spec.lower().split("x")) for spec in args.batches]
 
@@ -291,8 +486,23 @@ def main(argv: list[str] | None = None) -> None:
     )
     print(f"up to {args.steps} timed steps after {args.warmup} warm-up steps, {args.box_s:g} s time box each")
     print()
+    if args.adapter_only:
+        if not args.today_ref:
+            ap.error("--adapter-only needs --today-ref")
+        adapter_table(
+            args.counts, args.steps, args.warmup, args.box_s, args.seed, args.today_ref, args.repeat
+        )
+        return
     if batches:
-        vector_table(batches, args.steps, args.warmup, args.box_s, args.seed)  # type: ignore[arg-type]
+        vector_table(
+            batches,  # type: ignore[arg-type]
+            args.steps,
+            args.warmup,
+            args.box_s,
+            args.seed,
+            args.today_ref,
+            args.jaxmarl_python,
+        )
         print()
     if args.vector_only:
         return

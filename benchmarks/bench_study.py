@@ -1,8 +1,20 @@
 """Runs per second of a Monte Carlo study (`swarm.studies.run_study`) on 1 and 2 workers, on the local
-process pool and on Ray, and how well 2 workers scale over 1.
+process pool and on Ray, and how well 2 workers scale over 1; and (`--batched`) one worker's runs
+per second one run at a time against its runs in batches on the batched simulator.
 
     python benchmarks/bench_study.py [--mission missions/mine_clear.yaml] [--runs 8] [--seed 0]
                                      [--backends local ray] [--quiet-wait 60]
+    python benchmarks/bench_study.py --batched [--runs 32] [--batch B] [--repeat 2] [--today-ref REF]
+
+Batched (issue 13's target: at least 20 times today's runs/s on one worker, the same table): the
+same study on one local worker, today's way and batched, alternately `--repeat` times (the machine
+is shared: alternating spreads other programs' load over both). Today's way is this code with
+`--batch 1` (each run alone, through the PettingZoo adapter), or, with `--today-ref REF`, the code
+of git commit REF (`git archive` into a temporary folder, run in a fresh Python process with that
+folder first on its path). Batched is `run_study(..., batch=B)` (B automatic by default: each
+point's runs in batches of up to 32). Both plan the point once (each in its own fresh state) and
+write every file; the rate is runs / wall time of the `run_study` call, the ratio batched / today.
+Check: the two results tables are identical apart from runtime_s.
 
 The study: the mission as written (no sweeps: one parameter point), `--runs` runs, seed `--seed`.
 The default mission is the shipped `missions/mine_clear.yaml` (24 robots, about 10-15 s per run
@@ -74,6 +86,8 @@ MISSION = ROOT / "missions" / "mine_clear.yaml"
 WORKERS = (1, 2)
 #: The target: runs/s with 2 workers over runs/s with 1, per backend.
 TARGET_SPEEDUP = 1.8
+#: Issue 13's target: one worker's runs/s batched over one run at a time.
+TARGET_BATCHED = 20.0
 #: Other programs' CPU, as a share of one core over a configuration, above which the output warns.
 NOISY_SHARE = 0.05
 
@@ -233,6 +247,102 @@ def measure_study(spec: StudySpec, backend: str, workers: int) -> Result:
     )
 
 
+TODAY = """
+import json, sys, time
+from pathlib import Path
+import pyarrow.parquet as pq
+from swarm.studies.study import StudySpec, run_study
+mission, runs, seed, out = sys.argv[1], int(sys.argv[2]), int(sys.argv[3]), sys.argv[4]
+spec = StudySpec(mission, runs=runs, seed=seed)
+t0 = time.perf_counter()
+run_study(spec, out, workers=1)
+print(json.dumps({"wall_s": time.perf_counter() - t0}))
+"""
+
+
+def measure_today(spec: StudySpec, ref: str, src: Path, out: Path) -> tuple[float, pa.Table]:
+    """`run_study` on one worker with the code of git commit `ref` (exported to `src`)."""
+    env = dict(os.environ, PYTHONPATH=str(src))
+    res = subprocess.run(
+        [sys.executable, "-c", TODAY, spec.mission_path, str(spec.runs), str(spec.seed), str(out)],
+        capture_output=True, text=True, check=True, cwd=src, env=env,
+    )  # fmt: skip
+    wall = json.loads(res.stdout.strip().splitlines()[-1])["wall_s"]
+    return wall, pq.read_table(out / "results.parquet").drop_columns(list(VOLATILE))
+
+
+def measure_batched(spec: StudySpec, batch: int | None, out: Path) -> tuple[float, pa.Table]:
+    """`run_study` on one worker in this process, batches of `batch` runs (None: automatic)."""
+    runner._prepared.cache_clear()  # plan like a fresh worker
+    runner._setup.cache_clear()
+    t0 = time.perf_counter()
+    run_study(spec, out, workers=1, batch=batch)
+    wall = time.perf_counter() - t0
+    return wall, pq.read_table(out / "results.parquet").drop_columns(list(VOLATILE))
+
+
+def batched_main(args: argparse.Namespace) -> None:
+    mission = args.mission.resolve()
+    spec = StudySpec(str(mission), runs=args.runs, seed=args.seed)
+    shown = mission.relative_to(ROOT) if mission.is_relative_to(ROOT) else mission
+    today_name = f"git {args.today_ref}" if args.today_ref else "this code, --batch 1"
+    batch_name = f"--batch {args.batch}" if args.batch else "--batch auto"
+    print(
+        f"python {platform.python_version()}, {os.cpu_count()} cpus; mission {shown}; {args.runs} runs, "
+        f"seed {args.seed}, one local worker; today: {today_name}; batched: {batch_name}"
+    )
+    with tempfile.TemporaryDirectory(prefix="bench_study-batched-") as tmp:
+        tmp_path = Path(tmp)
+        src = tmp_path / "today-src"
+        if args.today_ref:
+            src.mkdir()
+            archive = subprocess.run(
+                ["git", "archive", args.today_ref], cwd=ROOT, capture_output=True, check=True
+            )
+            subprocess.run(["tar", "-x", "-C", str(src)], input=archive.stdout, check=True)
+        rows = []
+        tables: dict[str, pa.Table] = {}
+        for k in range(args.repeat):
+            for which in ("today", "batched"):
+                waited, _ = wait_quiet(args.quiet_wait) if args.quiet_wait > 0 else (0.0, float("nan"))
+                out = tmp_path / f"{which}-{k}"
+                with CpuMeter() as cpu:
+                    if which == "batched":
+                        wall, table = measure_batched(spec, args.batch, out)
+                    elif args.today_ref:
+                        wall, table = measure_today(spec, args.today_ref, src, out)
+                    else:
+                        wall, table = measure_batched(spec, 1, out)
+                tables.setdefault(which, table)
+                rows.append((which, k, wall, cpu.others))
+                print(
+                    f"  {which:<7} #{k + 1}: {args.runs} runs in {wall:7.1f} s = "
+                    f"{args.runs / wall:.3f} runs/s (others used {cpu.others / wall:.0%} of a core "
+                    f"meanwhile; waited {waited:.0f} s)",
+                    flush=True,
+                )
+    print()
+    best = {
+        w: max(args.runs / wall for which, _, wall, _ in rows if which == w) for w in ("today", "batched")
+    }
+    mean = {
+        w: args.runs / (sum(wall for which, _, wall, _ in rows if which == w) / args.repeat)
+        for w in ("today", "batched")
+    }
+    print(f"{'':<8} {'runs/s (best)':>13} {'runs/s (mean)':>13}")
+    for w in ("today", "batched"):
+        print(f"{w:<8} {best[w]:>13.3f} {mean[w]:>13.3f}")
+    ratio, ratio_mean = best["batched"] / best["today"], mean["batched"] / mean["today"]
+    print(f"{'ratio':<8} {ratio:>12.1f}x {ratio_mean:>12.1f}x")
+    verdict = "PASS" if ratio >= TARGET_BATCHED else "FAIL"
+    print(f"{verdict}  batched {ratio:.1f}x today's runs/s on one worker (target >= {TARGET_BATCHED:g}x)")
+    diff = _differences(tables["today"], tables["batched"])
+    if diff:
+        print(f"FAIL  results.parquet differ apart from runtime_s: {', '.join(diff)}")
+    else:
+        print(f"PASS  results.parquet identical apart from runtime_s ({tables['today'].num_rows} rows)")
+
+
 def _differences(a: pa.Table, b: pa.Table) -> list[str]:
     """Columns in which two tables differ (schema or values)."""
     if a.schema != b.schema or a.num_rows != b.num_rows:
@@ -252,7 +362,16 @@ def main(argv: list[str] | None = None) -> None:
         default=60.0,
         help="before each configuration, wait up to this many seconds for other programs to go quiet",
     )
+    ap.add_argument("--batched", action="store_true", help="one worker: one run at a time against batches")
+    ap.add_argument("--batch", type=int, help="--batched: runs per batch (default: automatic)")
+    ap.add_argument("--repeat", type=int, default=2, help="--batched: alternations of today and batched")
+    ap.add_argument(
+        "--today-ref", help="--batched: today is the code of this git commit (default: --batch 1)"
+    )
     args = ap.parse_args(argv)
+    if args.batched:
+        batched_main(args)
+        return
     mission = args.mission.resolve()
     spec = StudySpec(str(mission), runs=args.runs, seed=args.seed)
 

@@ -958,7 +958,7 @@ def _path_benchmark(args: argparse.Namespace, cm, profiles, start, goal) -> int:
 # --- swarm study: Monte Carlo over seeds and parameter grids (swarm/studies) ----------------------------
 def _add_study_command(commands) -> None:
     """`swarm study MISSION.yaml --runs N [--sweep KEY=VALUES ...] [--set KEY=VALUE ...] [--seed S]
-    [--workers K] [--backend local|ray] [--address ADDR] [--out DIR]`."""
+    [--workers K] [--backend local|ray] [--address ADDR] [--batch B] [--out DIR]`."""
     st = commands.add_parser(
         "study", help="run a mission many times over seeds and a parameter grid; success with intervals"
     )
@@ -979,6 +979,13 @@ def _add_study_command(commands) -> None:
     )
     st.add_argument("--backend", choices=("local", "ray"), default="local", help="where runs execute")
     st.add_argument("--address", help="Ray cluster address (e.g. auto, ray://host:10001); --backend ray")
+    st.add_argument(
+        "--batch",
+        type=int,
+        metavar="B",
+        help="runs of a point each worker steps together on the batched simulator (default: "
+        "automatic, up to 32; 1: one at a time); the table is the same whatever B",
+    )
     st.add_argument("--target", type=float, default=0.95, help="success probability to reach (default 0.95)")
     st.add_argument(
         "--confidence", type=float, default=0.95, help="confidence of the intervals (default 0.95)"
@@ -1006,6 +1013,8 @@ def _cmd_study(args: argparse.Namespace) -> int:
         raise InputError("command line", "--seed", args.seed, "a seed >= 0")
     if args.workers is not None and args.workers < 1:
         raise InputError("command line", "--workers", args.workers, "at least 1")
+    if args.batch is not None and args.batch < 1:
+        raise InputError("command line", "--batch", args.batch, "at least 1 run per batch")
     if args.address is not None and args.backend != "ray":
         raise InputError("command line", "--address", args.address, "--backend ray with it")
     for option, value in (("--target", args.target), ("--confidence", args.confidence)):
@@ -1044,7 +1053,13 @@ def _cmd_study(args: argparse.Namespace) -> int:
                     bar.update(done - bar.n)
 
             table, summary = run_study(
-                spec, out, backend=args.backend, workers=args.workers, address=args.address, progress=progress
+                spec,
+                out,
+                backend=args.backend,
+                workers=args.workers,
+                address=args.address,
+                progress=progress,
+                batch=args.batch,
             )
         from swarm.mission.load import load_mission
 

@@ -40,7 +40,7 @@ import numpy as np
 import shapely
 import shapely.ops
 from scipy import ndimage
-from shapely.geometry import LineString
+from shapely.geometry import LineString, Polygon
 
 from swarm.errors import SwarmError
 from swarm.files import write_text_atomic
@@ -186,6 +186,87 @@ class MissionPlan:
             "search_tracks_m": sum(sum(t.length for ts in s.tracks for t in ts) for s in self.search),
             "expected_coverage": self.expected_coverage,
         }
+
+    @classmethod
+    def from_dict(cls, d: dict, beach_map: object = None) -> MissionPlan:
+        """The plan `as_dict` wrote (plan.json), for drawing and reports: routes, search tracks and
+        the relay graph at plan.json's millimetre precision; no cost map."""
+        robots = []
+        for b in d["robots"]:
+            sea = np.asarray(b["sea_leg_m"], dtype=float).reshape(-1, 2)
+            ground = np.asarray(b["ground_m"], dtype=float).reshape(-1, 2)
+            wp = np.asarray(b["waypoints_m"], dtype=float).reshape(-1, 2)
+            track = wp[1 + (len(ground) if len(ground) else len(sea) - 1) :]
+            robots.append(
+                RobotPlan(
+                    id=b["id"],
+                    role=b["role"],
+                    task=b.get("task"),
+                    launch_m=(float(b["launch_m"][0]), float(b["launch_m"][1])),
+                    release_s=float(b["release_s"]),
+                    sea_leg_m=sea,
+                    ground_m=ground,
+                    track_m=track,
+                    eta_s=float(b["eta_s"]),
+                    sea_time_s=float(b["sea_time_s"]),
+                    ground_time_s=float(b["ground_time_s"]),
+                    length_m=float(b["length_m"]),
+                )
+            )
+        search = []
+        for s in d.get("search", []):
+            rings = s["area_m"] if s["area_m"] and isinstance(s["area_m"][0][0], list) else [s["area_m"]]
+            area = sum(Polygon(r).area for r in rings if len(r) >= 3)
+            search.append(
+                SearchPlan(
+                    task=s["task"],
+                    area=s.get("area", ""),
+                    area_m=s["area_m"],
+                    sweep_width_m=float(s["sweep_width_m"]),
+                    spacing_m=float(s["spacing_m"]),
+                    model=s["model"],
+                    tracks=[[LineString(t) for t in run if len(t) >= 2] for run in s.get("tracks_m", [])],
+                    expected_detection=float(s["expected_detection"]),
+                    swath_coverage=float(s["swath_coverage"]),
+                    area_m2=area,
+                    design=dict(s.get("design", {})),
+                )
+            )
+        relay = None
+        if d.get("relay"):
+            r = d["relay"]
+            source = np.asarray(r["source_m"], dtype=float).reshape(2)
+            sinks = np.asarray(r["sinks_m"], dtype=float).reshape(-1, 2)
+            positions = np.asarray(r["positions_m"], dtype=float).reshape(-1, 2)
+            edges = np.asarray(r["edges"], dtype=np.intp).reshape(-1, 2)
+            nodes = np.vstack([source[None, :], sinks, positions])
+            hops = np.hypot(*(nodes[edges[:, 0]] - nodes[edges[:, 1]]).T) if len(edges) else np.empty(0)
+            radio = RadioParams(**r["radio"]) if r.get("radio") else None
+            relay = RelayPlanOut(
+                task=r["task"],
+                source_m=source,
+                sinks_m=sinks,
+                comm_range_m=float(r["comm_range_m"]),
+                redundancy=int(r["redundancy"]),
+                positions_m=positions,
+                edges=edges,
+                hop_lengths_m=hops,
+                radio=radio,
+                fixed_height_m=r.get("fixed_height_m"),
+            )
+        return cls(
+            mission=d["mission"],
+            map=d["map"],
+            seed=int(d["seed"]),
+            robots=robots,
+            search=search,
+            relay=relay,
+            costmap=None,  # type: ignore[arg-type]
+            beach_map=beach_map,
+            source=dict(d.get("source") or {}),
+            criteria=dict(d.get("criteria") or {}),
+            budget=dict(d.get("budget") or {}),
+        )
 
     def as_dict(self) -> dict:
         relay = None

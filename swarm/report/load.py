@@ -25,17 +25,14 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Annotated, Any
 
-import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 from pydantic import BaseModel, ConfigDict, Field, model_validator
-from shapely.geometry import LineString, Polygon
 
 from swarm import files
 from swarm.errors import InputError, SwarmError
 from swarm.inputs import XY, expected, validate
-from swarm.mission.plan import MissionPlan, RelayPlanOut, RobotPlan, SearchPlan
-from swarm.planning.radio import RadioParams
+from swarm.mission.plan import MissionPlan
 from swarm.report.document import Report
 from swarm.report.plan_report import plan_report
 from swarm.report.sim_report import sim_report
@@ -281,94 +278,13 @@ class EvaluationFile(_Written):
     suggested_count: int | None = None
 
 
-def plan_from_dict(d: dict, beach_map=None) -> MissionPlan:
-    """A `MissionPlan` rebuilt from its JSON (plan.json) for drawing: routes, search tracks and the
-    relay graph at plan.json's millimetre precision; no cost map."""
-    robots = []
-    for b in d["robots"]:
-        sea = np.asarray(b["sea_leg_m"], dtype=float).reshape(-1, 2)
-        ground = np.asarray(b["ground_m"], dtype=float).reshape(-1, 2)
-        wp = np.asarray(b["waypoints_m"], dtype=float).reshape(-1, 2)
-        track = wp[1 + (len(ground) if len(ground) else len(sea) - 1) :]
-        robots.append(
-            RobotPlan(
-                id=b["id"],
-                role=b["role"],
-                task=b.get("task"),
-                launch_m=(float(b["launch_m"][0]), float(b["launch_m"][1])),
-                release_s=float(b["release_s"]),
-                sea_leg_m=sea,
-                ground_m=ground,
-                track_m=track,
-                eta_s=float(b["eta_s"]),
-                sea_time_s=float(b["sea_time_s"]),
-                ground_time_s=float(b["ground_time_s"]),
-                length_m=float(b["length_m"]),
-            )
-        )
-    search = []
-    for s in d.get("search", []):
-        rings = s["area_m"] if s["area_m"] and isinstance(s["area_m"][0][0], list) else [s["area_m"]]
-        area = sum(Polygon(r).area for r in rings if len(r) >= 3)
-        search.append(
-            SearchPlan(
-                task=s["task"],
-                area=s.get("area", ""),
-                area_m=s["area_m"],
-                sweep_width_m=float(s["sweep_width_m"]),
-                spacing_m=float(s["spacing_m"]),
-                model=s["model"],
-                tracks=[[LineString(t) for t in run if len(t) >= 2] for run in s.get("tracks_m", [])],
-                expected_detection=float(s["expected_detection"]),
-                swath_coverage=float(s["swath_coverage"]),
-                area_m2=area,
-                design=dict(s.get("design", {})),
-            )
-        )
-    relay = None
-    if d.get("relay"):
-        r = d["relay"]
-        source = np.asarray(r["source_m"], dtype=float).reshape(2)
-        sinks = np.asarray(r["sinks_m"], dtype=float).reshape(-1, 2)
-        positions = np.asarray(r["positions_m"], dtype=float).reshape(-1, 2)
-        edges = np.asarray(r["edges"], dtype=np.intp).reshape(-1, 2)
-        nodes = np.vstack([source[None, :], sinks, positions])
-        hops = np.hypot(*(nodes[edges[:, 0]] - nodes[edges[:, 1]]).T) if len(edges) else np.empty(0)
-        radio = RadioParams(**r["radio"]) if r.get("radio") else None
-        relay = RelayPlanOut(
-            r["task"],
-            source,
-            sinks,
-            float(r["comm_range_m"]),
-            int(r["redundancy"]),
-            positions,
-            edges,
-            hops,
-            radio=radio,
-            fixed_height_m=r.get("fixed_height_m"),
-        )
-    return MissionPlan(
-        d["mission"],
-        d["map"],
-        int(d["seed"]),
-        robots,
-        search,
-        relay,
-        None,
-        beach_map,
-        dict(d.get("source") or {}),
-        dict(d.get("criteria") or {}),
-        dict(d.get("budget") or {}),
-    )
-
-
 def read_plan(folder: str | Path) -> tuple[MissionPlan, dict]:
     """The plan in `folder`/plan.json (with its map when it can be found) and the JSON itself."""
     path = Path(folder) / PLAN_FILE
     d = read_json(path, "plan.json")
     validate(PlanFile, d, path)
     try:
-        return plan_from_dict(d, load_beach_map(d.get("source") or {})), d
+        return MissionPlan.from_dict(d, load_beach_map(d.get("source") or {})), d
     except (KeyError, TypeError, ValueError, IndexError) as exc:
         raise InputError(
             path, "(contents)", f"{type(exc).__name__}: {exc}", "a plan.json written by swarm"

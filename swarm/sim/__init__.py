@@ -1,6 +1,10 @@
 """The swarm simulator: a PettingZoo environment in which every robot moves by the `skid` model
 over the mission's beach map, hazards take robots, and the survivors coordinate over radio.
 
+The core is batched (`swarm.sim.world.World`: B runs on (B, n, ...) arrays, one `advance` for
+all); `SwarmEnv` is its PettingZoo adapter for one run, `vector_env` its batched adapter,
+`swarm.sim.run.simulate_batch` the scripted policy over a batch.
+
 ```python
 import swarm.sim
 env = swarm.sim.parallel_env(mission="missions/mine_clear.yaml", overrides={"swarm.count": 40})

@@ -148,6 +148,10 @@ class MissionScore:
         parts = [1.0 if self.targets[k] <= 0 else min(1.0, v / self.targets[k]) for k, v in vals.items()]
         return float(np.mean(parts))
 
+    def success(self) -> bool:
+        """Whether every criterion is met now (`outcome()["success"]`, without building it)."""
+        return all(v >= self.targets[k] - 1e-12 for k, v in self.values().items())
+
     def outcome(self) -> dict:
         """{criterion: {value, target, met}} and `success` (every criterion met)."""
         crit = {

@@ -210,21 +210,69 @@ class _ContactIndex:
         """Robots (indices where `mask`) with at least one point within radius_m, and those points."""
         if self.tree is None:
             return np.empty(0, dtype=np.intp), []
-        c = (xy - self.lo) * (1.0 / self.cell_m)
-        x, y = c[:, 0], c[:, 1]
-        # NaN positions (robots at sea, if the env leaves them so) compare False: never inside
-        sel = np.flatnonzero(mask & (x >= 0.0) & (x < self.nx) & (y >= 0.0) & (y < self.ny))
-        sel = sel[self.grid[y[sel].astype(np.intp) * self.nx + x[sel].astype(np.intp)]]  # >= 0: cast floors
-        if sel.size == 0:
-            return sel, []
+        return self.exact(xy, _ContactScreen([self]).screen(xy, mask, np.zeros(len(xy), np.intp)))
+
+    def exact(self, xy: np.ndarray, sel: np.ndarray) -> tuple[np.ndarray, list[list[int]]]:
+        """Of the screened robots `sel`, those with a point within radius_m, and those points."""
+        if sel.size == 0 or self.tree is None:
+            return sel[:0], []
         hits = self.tree.query_ball_point(xy[sel], self.radius_m)
         keep = [k for k, h in enumerate(hits) if h]
         return sel[keep], [sorted(hits[k]) for k in keep]
 
 
+class _ContactScreen:
+    """The occupancy grids of several runs' contact indexes, screened in one pass: each robot is
+    looked up in its own run's grid (the same cells `_ContactIndex` flags, so the same superset)."""
+
+    def __init__(self, indexes: Sequence[_ContactIndex]) -> None:
+        k = len(indexes)
+        self.lo = np.zeros((k, 2))
+        self.inv_cell = np.ones(k)
+        self.nx = np.zeros(k, dtype=np.intp)  # 0: a run without points screens nobody in
+        self.ny = np.zeros(k, dtype=np.intp)
+        self.offset = np.zeros(k, dtype=np.intp)
+        grids, at = [], 0
+        for b, ix in enumerate(indexes):
+            if ix.tree is None:
+                continue
+            self.lo[b], self.inv_cell[b] = ix.lo, 1.0 / ix.cell_m
+            self.nx[b], self.ny[b], self.offset[b] = ix.nx, ix.ny, at
+            grids.append(ix.grid)
+            at += len(ix.grid)
+        self.grid = np.concatenate(grids) if grids else np.zeros(0, bool)
+        self.empty = not grids
+        for b, ix in enumerate(indexes):  # one copy of each grid: the index's is a view of ours
+            if ix.tree is not None:
+                ix.grid = self.grid[self.offset[b] : self.offset[b] + len(ix.grid)]
+
+    def screen(self, xy: np.ndarray, mask: np.ndarray, run: np.ndarray) -> np.ndarray:
+        """Indices where `mask` of the robots in a flagged cell of their run's grid (`run` (n,))."""
+        if self.empty:
+            return np.empty(0, dtype=np.intp)
+        if len(self.nx) == 1:  # one run: its grid's numbers as scalars (`_ContactIndex`'s own screen)
+            nx, ny = int(self.nx[0]), int(self.ny[0])
+            c = (xy - self.lo[0]) * float(self.inv_cell[0])
+            x, y = c[:, 0], c[:, 1]
+            sel = np.flatnonzero(mask & (x >= 0.0) & (x < nx) & (y >= 0.0) & (y < ny))
+            return sel[self.grid[y[sel].astype(np.intp) * nx + x[sel].astype(np.intp)]]
+        c = (xy - self.lo[run]) * self.inv_cell[run][:, None]
+        x, y = c[:, 0], c[:, 1]
+        nx = self.nx[run]
+        # NaN positions (robots at sea, if the env leaves them so) compare False: never inside
+        sel = np.flatnonzero(mask & (x >= 0.0) & (x < nx) & (y >= 0.0) & (y < self.ny[run]))
+        flat = self.offset[run[sel]] + y[sel].astype(np.intp) * nx[sel] + x[sel].astype(np.intp)
+        return sel[self.grid[flat]]  # >= 0: the cast floors
+
+
 class HazardModel:
     """The mission's hazards for a swarm of `n_robots`; keeps the per-robot state the rules need
-    (stuck timers, boulder contact, which mines and hidden rocks each robot has already touched)."""
+    (stuck timers, boulder contact, which mines and hidden rocks each robot has already touched).
+
+    One model serves a batch of `runs` independent runs of the mission (`swarm.sim.world`): give
+    it a list of mine fields and one of hidden rocks, a run each, inputs with a row per robot of
+    every run (run-major), and one generator per run. Each run draws from its own generator
+    exactly what it would alone, so a run's losses do not depend on the batch it is in."""
 
     def __init__(
         self,
@@ -232,14 +280,19 @@ class HazardModel:
         phases: schema.Phases,
         terrain_classes: Sequence[str],
         library: TerrainLibrary,
-        minefield: MineField,
-        hidden_rocks_m: np.ndarray,
+        minefield: MineField | Sequence[MineField],
+        hidden_rocks_m: np.ndarray | Sequence[np.ndarray],
         n_robots: int,
     ) -> None:
         self.hazards = hazards
         self.phases = phases
         self.terrain_classes = tuple(terrain_classes)
-        self.minefield = minefield
+        self.batched = not isinstance(minefield, MineField)
+        fields = list(minefield) if self.batched else [minefield]
+        rocks = list(hidden_rocks_m) if self.batched else [hidden_rocks_m]
+        if len(rocks) != len(fields):
+            raise ValueError(f"hazards: {len(fields)} mine fields and {len(rocks)} sets of hidden rocks")
+        self.runs = len(fields)
         self.n = int(n_robots)
         modes = [library[name] for name in self.terrain_classes]  # every map class names a mode
 
@@ -267,12 +320,44 @@ class HazardModel:
         self._sea_limit_s = phases.sea_transit.time_limit_s
         self._surf_limit_s = phases.surf_crossing.time_limit_s
 
-        self._mines = _ContactIndex(minefield.positions_m, minefield.trigger_radius_m)
-        self._rocks = _ContactIndex(hidden_rocks_m, ROCK_CONTACT_M)
-        self._mine_seen: set[tuple[int, int]] = set()
-        self._rock_seen: set[tuple[int, int]] = set()
-        self._stuck_s = np.zeros(self.n)
-        self._on_boulder = np.zeros(self.n, dtype=bool)
+        self.minefields: list[MineField] = [None] * self.runs  # type: ignore[list-item]
+        self._mines: list[_ContactIndex] = [None] * self.runs  # type: ignore[list-item]
+        self._rocks: list[_ContactIndex] = [None] * self.runs  # type: ignore[list-item]
+        self._mine_seen: list[set[tuple[int, int]]] = [set() for _ in range(self.runs)]
+        self._rock_seen: list[set[tuple[int, int]]] = [set() for _ in range(self.runs)]
+        self._stuck_s = np.zeros(self.runs * self.n)
+        self._on_boulder = np.zeros(self.runs * self.n, dtype=bool)
+        self._run_of = np.repeat(np.arange(self.runs, dtype=np.intp), self.n)
+        for b in range(self.runs):
+            self._set_run(b, fields[b], rocks[b])
+        self._screens()
+
+    @property
+    def minefield(self) -> MineField:
+        """The mine field (of the first run of a batch)."""
+        return self.minefields[0]
+
+    def _set_run(self, b: int, minefield: MineField, hidden_rocks_m: np.ndarray) -> None:
+        self.minefields[b] = minefield
+        self._mines[b] = _ContactIndex(minefield.positions_m, minefield.trigger_radius_m)
+        self._rocks[b] = _ContactIndex(hidden_rocks_m, ROCK_CONTACT_M)
+        self._mine_seen[b] = set()
+        self._rock_seen[b] = set()
+        rows = slice(b * self.n, (b + 1) * self.n)
+        self._stuck_s[rows] = 0.0
+        self._on_boulder[rows] = False
+
+    def _screens(self) -> None:
+        self._mine_screen = _ContactScreen(self._mines)
+        self._rock_screen = _ContactScreen(self._rocks)
+
+    def reset_runs(
+        self, runs: Sequence[int], minefields: Sequence[MineField], rocks: Sequence[np.ndarray]
+    ) -> None:
+        """Start runs `runs` of the batch anew, with their new mine fields and hidden rocks."""
+        for b, mf, r in zip(runs, minefields, rocks, strict=True):
+            self._set_run(int(b), mf, r)
+        self._screens()
 
     @property
     def stuck_s(self) -> np.ndarray:
@@ -292,48 +377,69 @@ class HazardModel:
     def rates_per_s(self, inp: HazardInputs) -> np.ndarray:
         """(n, 4) continuous hazard rates, per second, columns `RATE_CAUSES`: failure, immobilized,
         rock, radio dropout; zero for robots not alive."""
-        self._check(inp)
+        self._check(inp, len(inp.alive))
         on_map = inp.alive & ~inp.at_sea
         return self._rates(inp, on_map, np.where(on_map, inp.terrain, 0))
 
     def _rates(self, inp: HazardInputs, on_map: np.ndarray, cls: np.ndarray) -> np.ndarray:
         per_s = inp.distance_m * (on_map / inp.dt_s)
         slip = np.clip(inp.slip, 0.0, 1.0) * (1.0 / SLIP_SCALE)
-        rates = np.empty((self.n, 4))
+        rates = np.empty((len(on_map), 4))
         rates[:, 0] = inp.alive * self._failure_per_s
         rates[:, 1] = self._immob_per_m[cls] * (1.0 + slip * slip) * per_s
         rates[:, 2] = self._rock_per_m[cls] * per_s
         rates[:, 3] = (inp.alive & inp.radio_ok) * self._dropout_per_s
         return rates
 
-    def step(self, inp: HazardInputs, rng: np.random.Generator) -> Losses:
+    def step(
+        self,
+        inp: HazardInputs,
+        rng: np.random.Generator | Sequence[np.random.Generator],
+        runs: Sequence[int] | None = None,
+    ) -> Losses:
         """Decide which robots are lost this step and why (see the module docstring for the order).
-        With `hazards.enabled` false nobody is (the draws are still made, to keep the stream)."""
-        self._check(inp)
-        u = rng.random((self.n, N_UNIFORMS))  # fixed shape: see "Determinism" above
+        With `hazards.enabled` false nobody is (the draws are still made, to keep the stream).
+
+        In a batch, `rng` is one generator per run and `runs` the runs stepped (all by default):
+        the inputs hold their robots' rows, run after run."""
+        runs = list(range(self.runs)) if runs is None else [int(b) for b in runs]
+        gens = [rng] if isinstance(rng, np.random.Generator) else list(rng)
+        if len(gens) != len(runs):
+            raise ValueError(f"hazards: {len(gens)} generators for {len(runs)} runs")
+        n = self.n
+        size = n * len(runs)
+        self._check(inp, size)
+        # fixed shape per run: see "Determinism" above
+        u = (
+            gens[0].random((n, N_UNIFORMS))
+            if len(gens) == 1
+            else np.concatenate([g.random((n, N_UNIFORMS)) for g in gens])
+        )
         if not self.hazards.enabled:
-            none = np.full(self.n, NO_LOSS, dtype=np.int64)
-            return Losses(cause=none, mine=np.full(self.n, -1, dtype=np.int64), radio_dropped=none >= 0)
+            none = np.full(size, NO_LOSS, dtype=np.int64)
+            return Losses(cause=none, mine=np.full(size, -1, dtype=np.int64), radio_dropped=none >= 0)
+        every = len(runs) == self.runs  # runs are distinct: all of them, in order
+        rows = slice(None) if every else np.concatenate([np.arange(b * n, (b + 1) * n) for b in runs])
+        run_of = self._run_of[rows]
         alive = inp.alive
         on_map = alive & ~inp.at_sea
         cls = np.where(on_map, inp.terrain, 0)  # the terrain is not looked at where at sea
         rates = self._rates(inp, on_map, cls)
-        n = self.n
-        cause = np.full(n, NO_LOSS, dtype=np.int64)
-        mine = np.full(n, -1, dtype=np.int64)
+        cause = np.full(size, NO_LOSS, dtype=np.int64)
+        mine = np.full(size, -1, dtype=np.int64)
 
         # the state-keeping rules run for every robot, whatever else takes it this step
-        stuck = self._update_stuck(inp, on_map, cls)
+        stuck = self._update_stuck(inp, on_map, cls, rows)
         boulder = self._is_boulder[inp.obstacle_hit] & alive
-        new_boulder = boulder & ~self._on_boulder
-        self._on_boulder = boulder
-        hidden = self._hidden_rock_hits(inp.xy, on_map, u[:, _U_HIDDEN])
-        self._trigger_mines(inp.xy, on_map, u[:, _U_MINE], mine)
+        new_boulder = boulder & ~self._on_boulder[rows]
+        self._on_boulder[rows] = boulder
+        hidden = self._hidden_rock_hits(inp.xy, on_map, u[:, _U_HIDDEN], run_of)
+        self._trigger_mines(inp.xy, on_map, u[:, _U_MINE], mine, run_of)
 
         # continuous: P(lost) = 1 - exp(-sum(lambda) dt); cause by lambda_c / sum(lambda)
         total = rates.sum(axis=1)
         cont = u[:, _U_LOST] < -np.expm1(-total * inp.dt_s)
-        which = np.zeros(n, dtype=np.intp)
+        which = np.zeros(size, dtype=np.intp)
         if cont.any():
             cum = np.cumsum(rates[cont], axis=1)
             # cum[:, -1] rather than total: the pick stays < 4 whatever the rounding
@@ -358,50 +464,71 @@ class HazardModel:
 
     # --- the rules with state ------------------------------------------------------------------
 
-    def _update_stuck(self, inp: HazardInputs, on_map: np.ndarray, cls: np.ndarray) -> np.ndarray:
+    def _update_stuck(self, inp: HazardInputs, on_map: np.ndarray, cls: np.ndarray, rows) -> np.ndarray:
         """Advance the stuck timers; True where a robot has spun its wheels for STUCK_AFTER_S."""
         spinning = on_map & inp.driving & (inp.slip >= STUCK_SLIP) & self._can_stick[cls]
-        self._stuck_s = np.where(spinning, self._stuck_s + inp.dt_s, 0.0)
-        return self._stuck_s >= STUCK_AFTER_S - _TIME_EPS_S
+        stuck_s = np.where(spinning, self._stuck_s[rows] + inp.dt_s, 0.0)
+        self._stuck_s[rows] = stuck_s
+        return stuck_s >= STUCK_AFTER_S - _TIME_EPS_S
 
-    def _hidden_rock_hits(self, xy: np.ndarray, on_map: np.ndarray, u: np.ndarray) -> np.ndarray:
+    def _by_run(self, screen: _ContactScreen, indexes, xy, mask, run_of):
+        """(run, local row, points) of every robot touching a point of its run's index, in row order."""
+        sel = screen.screen(xy, mask, run_of)
+        if sel.size == 0:
+            return
+        if self.runs == 1:
+            robots, near = indexes[0].exact(xy, sel)
+            for k, pts in zip(robots.tolist(), near, strict=True):
+                yield 0, k, pts
+            return
+        runs = run_of[sel]
+        cuts = np.flatnonzero(np.diff(runs)) + 1
+        for part in np.split(sel, cuts):
+            b = int(run_of[part[0]])
+            robots, near = indexes[b].exact(xy, part)
+            for k, pts in zip(robots.tolist(), near, strict=True):
+                yield b, k, pts
+
+    def _hidden_rock_hits(self, xy: np.ndarray, on_map: np.ndarray, u: np.ndarray, run_of) -> np.ndarray:
         """True where first contacts with hidden rocks disable a robot: 1 - (1 - p)^k for k new rocks."""
-        hit = np.zeros(self.n, dtype=bool)
-        robots, near = self._rocks.near(xy, on_map)
-        for i, rocks in zip(robots.tolist(), near, strict=True):
-            new = [r for r in rocks if (i, r) not in self._rock_seen]
-            self._rock_seen.update((i, r) for r in new)
-            if new and u[i] < 1.0 - (1.0 - self._p_collision) ** len(new):
-                hit[i] = True
+        hit = np.zeros(len(on_map), dtype=bool)
+        for b, k, rocks in self._by_run(self._rock_screen, self._rocks, xy, on_map, run_of):
+            i = k % self.n  # the robot within its run
+            seen = self._rock_seen[b]
+            new = [r for r in rocks if (i, r) not in seen]
+            seen.update((i, r) for r in new)
+            if new and u[k] < 1.0 - (1.0 - self._p_collision) ** len(new):
+                hit[k] = True
         return hit
 
-    def _trigger_mines(self, xy: np.ndarray, on_map: np.ndarray, u: np.ndarray, mine: np.ndarray) -> None:
+    def _trigger_mines(
+        self, xy: np.ndarray, on_map: np.ndarray, u: np.ndarray, mine: np.ndarray, run_of
+    ) -> None:
         """Try every first robot-mine contact; set `mine[i]` and mark the mine exploded where one goes off.
 
         Robots in index order; with k new mines under one robot, the first success of k Bernoulli(p)
         trials in mine-index order is the geometric J = floor(log(1 - u) / log(1 - p)) from one uniform.
         """
-        if self._mines.tree is None:
-            return
-        mf = self.minefield
-        p = mf.trigger_probability
-        robots, near = self._mines.near(xy, on_map)
-        for i, mines in zip(robots.tolist(), near, strict=True):
+        for b, k, mines in self._by_run(self._mine_screen, self._mines, xy, on_map, run_of):
+            mf = self.minefields[b]
+            p = mf.trigger_probability
+            i = k % self.n
+            seen = self._mine_seen[b]
             new = [m for m in mines if not (mf.exploded[m] or mf.cleared[m] or mf.marked[m])]
-            new = [m for m in new if (i, m) not in self._mine_seen]
+            new = [m for m in new if (i, m) not in seen]
             if not new:
                 continue
-            self._mine_seen.update((i, m) for m in new)
+            seen.update((i, m) for m in new)
             if p <= 0.0:
                 continue
-            j = 0 if p >= 1.0 else math.floor(math.log1p(-u[i]) / math.log1p(-p))
+            j = 0 if p >= 1.0 else math.floor(math.log1p(-u[k]) / math.log1p(-p))
             if j < len(new):
-                mine[i] = new[j]
+                mine[k] = new[j]
                 mf.exploded[new[j]] = True
 
-    def _check(self, inp: HazardInputs) -> None:
-        if inp.alive.shape != (self.n,) or inp.xy.shape != (self.n, 2):
-            raise ValueError(f"hazard inputs for {inp.alive.shape} robots, the model has {self.n}")
+    def _check(self, inp: HazardInputs, size: int) -> None:
+        if inp.alive.shape != (size,) or inp.xy.shape != (size, 2):
+            raise ValueError(f"hazard inputs for {inp.alive.shape} robots, the model has {size}")
         if not inp.dt_s > 0.0:
             raise ValueError(f"dt_s must be > 0, got {inp.dt_s}")
 

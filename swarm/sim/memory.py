@@ -73,14 +73,16 @@ def check_fits(
     at_once: int = 1,
     record_every_s: float = RECORD_EVERY_S,
     source: str | None = None,
+    batch: int = 1,
 ) -> int:
     """Refuse (`InputError` on `swarm.count`) a mission whose `at_once` runs in parallel would need
-    more memory than is available; returns the estimate in bytes for one run."""
+    more memory than is available; returns the estimate in bytes for one run (of `batch` runs
+    stepped together in one process, `swarm.sim.world`: one map, `batch` times the robots)."""
     bm = mission.beach_map
     cells = int(bm.terrain.size)
     count = mission.swarm.count
     time_s = mission_time_s(mission)
-    one = estimate_bytes(cells, count, time_s, simulate=simulate, record_every_s=record_every_s)
+    one = estimate_bytes(cells, count * batch, time_s, simulate=simulate, record_every_s=record_every_s)
     free = available_bytes()
     if free is not None and one * at_once > free:
         rows, cols = bm.terrain.shape

@@ -199,6 +199,46 @@ class PhysicsStep:
     obstacle_hit: np.ndarray  # (n,) int class of an impassable cell the robot ran into, -1 none
 
 
+class _Waves:
+    """The wave shape and crest passages of one step's substeps: one run (scalars), or a batch of
+    runs, each at its own time and wave phase (computed run by run as for one run, then spread to
+    the robots by `run`)."""
+
+    def __init__(self, sea: SeaState, t_s, wave_phase_s, run, dt_s: float, n_sub: int) -> None:
+        self.sea, self.dt_s, self.n_sub, self.run = sea, dt_s, n_sub, run
+        if run is None:
+            self.t, self.ph = float(t_s), float(wave_phase_s)
+            self.crests = sea.crests_by(t_s, wave_phase_s)
+        else:
+            self.runs = np.unique(run).tolist()
+            self.t = {b: float(t_s[b]) for b in self.runs}
+            self.ph = {b: float(wave_phase_s[b]) for b in self.runs}
+            self.crests = {b: sea.crests_by(self.t[b], self.ph[b]) for b in self.runs}
+            self.size = int(max(self.runs)) + 1 if self.runs else 0
+
+    def shape(self, k: int):
+        frac = self.dt_s * k / self.n_sub
+        if self.run is None:
+            return self.sea.wave_shape(self.t + frac, self.ph)
+        per_run = np.zeros(self.size)
+        for b in self.runs:
+            per_run[b] = self.sea.wave_shape(self.t[b] + frac, self.ph[b])
+        return per_run[self.run]
+
+    def crest(self, k: int):
+        """True / False (one run), or a bool per robot: a crest passed in substep k."""
+        frac = self.dt_s * (k + 1) / self.n_sub
+        if self.run is None:
+            nxt = self.sea.crests_by(self.t + frac, self.ph)
+            passed, self.crests = nxt > self.crests, nxt
+            return passed
+        per_run = np.zeros(self.size, bool)
+        for b in self.runs:
+            nxt = self.sea.crests_by(self.t[b] + frac, self.ph[b])
+            per_run[b], self.crests[b] = nxt > self.crests[b], nxt
+        return per_run[self.run] if per_run.any() else False
+
+
 class Physics:
     """Vectorized world physics over one beach for one robot type."""
 
@@ -310,10 +350,14 @@ class Physics:
         dt_s: float,
         wave_phase_s: float,
         active: np.ndarray | None = None,
+        run: np.ndarray | None = None,
     ) -> PhysicsStep:
         """Advance every active robot by `dt_s` from time `t_s` in equal substeps of at most
         `substep_s`. Inactive rows come back unchanged and cost nothing: zero power and distance, no
-        hits, terrain -1, submersion 0, not in the surf. The input arrays are not modified."""
+        hits, terrain -1, submersion 0, not in the surf. The input arrays are not modified.
+
+        A batch of runs (`swarm.sim.world`): `run` (n,) gives each row's run, and `t_s` and
+        `wave_phase_s` are arrays with an entry per run; each run's waves are its own."""
         if not dt_s > 0.0:
             raise ValueError(f"dt_s must be > 0, got {dt_s}")
         state = np.asarray(state, dtype=np.float64)
@@ -323,7 +367,7 @@ class Physics:
         inv = np.broadcast_to(np.asarray(inverted, dtype=bool), (n,))
         act = None if active is None else np.broadcast_to(np.asarray(active, dtype=bool), (n,))
         if act is None or act.all():
-            return self._run(state, cmd, jet, inv, t_s, dt_s, wave_phase_s)
+            return self._run(state, cmd, jet, inv, t_s, dt_s, wave_phase_s, run)
         res = PhysicsStep(
             state=state.copy(),
             power_w=np.zeros(n),
@@ -338,7 +382,8 @@ class Physics:
         )
         idx = np.flatnonzero(act)
         if idx.size:
-            r = self._run(state[idx], cmd[idx], jet[idx], inv[idx], t_s, dt_s, wave_phase_s)
+            sub = None if run is None else run[idx]
+            r = self._run(state[idx], cmd[idx], jet[idx], inv[idx], t_s, dt_s, wave_phase_s, sub)
             for f in fields(PhysicsStep):
                 getattr(res, f.name)[idx] = getattr(r, f.name)
         return res
@@ -349,9 +394,10 @@ class Physics:
         cmd: np.ndarray,
         jet: np.ndarray,
         inverted: np.ndarray,
-        t_s: float,
+        t_s: float | np.ndarray,
         dt_s: float,
-        wave_phase_s: float,
+        wave_phase_s: float | np.ndarray,
+        run: np.ndarray | None = None,
     ) -> PhysicsStep:
         """The substep loop over the active robots only (returns fresh arrays)."""
         # turned over: sides swapped, each wheel turning the other way relative to the body
@@ -371,9 +417,8 @@ class Physics:
         wrench = np.zeros((m, 3))
         traction = np.zeros((m, 2))
         cell = self._cells(s[:, X], s[:, Y])
-        crests = sea.crests_by(t_s, wave_phase_s)
+        waves = _Waves(sea, t_s, wave_phase_s, run, dt_s, n_sub)
         for k in range(n_sub):
-            t0 = t_s + dt_s * k / n_sub
             cls = self._terrain[cell]
             coef = self._gather(self._class_coef, cls)
             props = self._gather(self._props, cell)
@@ -382,7 +427,7 @@ class Physics:
             heading = s[:, HEADING]
             c, sn = np.cos(heading), np.sin(heading)
             # water velocity, world then body frame; drag on the velocity relative to it
-            shape = sea.wave_shape(t0, wave_phase_s)
+            shape = waves.shape(k)
             wx = props[_CURRENT_X] + shape * props[_WAVE_X]
             wy = shape * props[_WAVE_Y]
             u, v = s[:, U], s[:, V]
@@ -427,11 +472,13 @@ class Physics:
             ratio[aw < SLIP_MIN_SPEED_MPS] = 0.0
             slip += ratio
 
-            crests_next = sea.crests_by(t_s + dt_s * (k + 1) / n_sub, wave_phase_s)
-            if crests_next > crests:
+            crest = waves.crest(k)
+            if crest is True:
                 hits |= props[_SURF] > 0.0
                 np.maximum(hit_height, props[_SURF], out=hit_height)
-            crests = crests_next
+            elif crest is not False:  # per robot, by its run
+                hits |= (props[_SURF] > 0.0) & crest
+                hit_height = np.where(crest, np.maximum(hit_height, props[_SURF]), hit_height)
             s, cell = new, new_cell
 
         # wheel power at the end of the step: each side's slip traction (rolling resistance left

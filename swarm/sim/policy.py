@@ -39,6 +39,7 @@ from __future__ import annotations
 import itertools
 import math
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from scipy.sparse import csr_matrix
@@ -46,8 +47,8 @@ from scipy.spatial import cKDTree
 
 from swarm.planning.allocation import auction
 from swarm.sim.criteria import STATION_RADIUS_M
-from swarm.sim.env import FOLLOW, LOITER, MARK, RETURN, RETURNING, SEA, SwarmEnv
 from swarm.sim.layout import ROLES
+from swarm.sim.runview import FOLLOW, LOITER, MARK, RETURN, RETURNING, SEA, RunView
 from swarm.sim.standoff import SafeGround, free_cell_graph
 
 #: Extra distance beyond the clearance standoff that robots retreat to (m).
@@ -109,14 +110,22 @@ def split_polyline(points: np.ndarray, piece_m: float) -> list[np.ndarray]:
 
 
 class ScriptedPolicy:
-    """Coordination by script over an environment made with action_mode="command"."""
+    """Coordination by script of one run: a `RunView` of a batch (`swarm.sim.world`), or a
+    `SwarmEnv` made with action_mode="command" (its run).
+
+    Everything it reads and commands goes through the run's interface (`swarm.sim.runview`):
+    the per-robot arrays, `routes`, `router`, `links`, `score`, `events`, `objects_m`,
+    `set_command`, `set_route`, `route_goal` and `log_event`."""
 
     def __init__(
-        self, env: SwarmEnv, *, realloc_period_s: float = 5.0, clearance_lead_s: float = 120.0
+        self, env: RunView | Any, *, realloc_period_s: float = 5.0, clearance_lead_s: float = 120.0
     ) -> None:
-        if env.action_mode != "command":
-            raise ValueError("ScriptedPolicy needs an environment with action_mode='command'")
-        self.env = env
+        if not isinstance(env, RunView):
+            if getattr(env, "action_mode", None) != "command":
+                raise ValueError("ScriptedPolicy needs an environment with action_mode='command'")
+            self.agent_env = env
+            env = env.run
+        self.env: RunView = env
         self.realloc_period_s = realloc_period_s
         self.clearance_lead_s = clearance_lead_s
         self._graph: csr_matrix | None = None  # the cost map's free cells (`standoff`), built once
@@ -132,6 +141,7 @@ class ScriptedPolicy:
         self._returning = False
         self._links_seen = -1
         self._safe_cache: tuple[tuple[bytes, float], SafeGround] | None = None
+        self._found_cache: tuple[tuple[int, int, int], np.ndarray, cKDTree | None] | None = None
 
     # the step ------------------------------------------------------------------------------------
     def act(self) -> dict[str, dict]:
@@ -139,9 +149,11 @@ class ScriptedPolicy:
         self.update()
         env = self.env
         return {
-            a: {"command": int(env.command[i]), "target": env.target_m[i].astype(np.float32)}
-            for a in env.agents
-            for i in (env.agent_index[a],)
+            env.possible_agents[i]: {
+                "command": int(env.command[i]),
+                "target": env.target_m[i].astype(np.float32),
+            }
+            for i in np.flatnonzero(env.in_agents).tolist()
         }
 
     def update(self) -> None:
@@ -217,7 +229,7 @@ class ScriptedPolicy:
         clearance, the end of the route it will resume (a beacon robot lost while clear of the
         blast used to hand its retreat point, not its beacon, to the robot taking over)."""
         held = self._held.get(i)
-        return held[0][-1].copy() if held is not None else self.env._route_goal()[i]
+        return held[0][-1].copy() if held is not None else self.env.route_goal()[i]
 
     def _on_loss(self, i: int) -> None:
         """Ashore, a loss is known to the robot's radio component. A robot lost before it reached
@@ -247,15 +259,19 @@ class ScriptedPolicy:
         if env.links_version == self._links_seen:
             return  # news travels only when the radio graph is updated
         self._links_seen = env.links_version
+        open_items = [it for it in self.items if it.taken_by < 0 and it.audience.any()]
+        if not open_items:
+            return
         comp = env.links.component[: env.n]
         alive = env.alive
-        reached = np.zeros(int(comp.max(initial=-1)) + 2, bool)  # per component (+1: -1 is none)
-        for it in self.items:
-            if it.taken_by >= 0 or not it.audience.any():
-                continue
-            reached[:] = False
-            reached[comp[it.audience & alive] + 1] = True
-            it.audience = (it.audience | reached[comp + 1]) & alive
+        # every open item at once: the components its audience reaches (+1: -1 is none), then all of
+        # each reached component's robots
+        heard = np.array([it.audience for it in open_items]) & alive
+        reached = np.zeros((len(open_items), int(comp.max(initial=-1)) + 2), bool)
+        item, robot = np.nonzero(heard)
+        reached[item, comp[robot] + 1] = True
+        for it, audience in zip(open_items, (heard | reached[:, comp + 1]) & alive, strict=True):
+            it.audience = audience
 
     # who is free ----------------------------------------------------------------------------------------
     def _idle(self) -> np.ndarray:
@@ -375,7 +391,7 @@ class ScriptedPolicy:
     def _station_goals(self) -> np.ndarray:
         """Where each robot's route ends, or, for a stand-by waiting out a clearance, the point
         it waits to hold."""
-        goals = self.env._route_goal().copy()
+        goals = self.env.route_goal().copy()
         for i, point in self._waiting.items():
             goals[i] = point
         return goals
@@ -394,12 +410,22 @@ class ScriptedPolicy:
         """The mines found so far, how far to keep from them (the clearance standoff and the
         margin), and which of the robots `who` are closer than that to one."""
         env = self.env
-        found = sorted({it.obj for it in self.items if it.kind == "mark"})
-        objs = env.objects_m[found]
+        objs, tree = self._found_mines()
         safe_m = env.clearance.standoff_m + STANDOFF_MARGIN_M
-        if not found or not len(who):
+        if tree is None or not len(who):
             return objs, safe_m, who[:0]
-        return objs, safe_m, who[cKDTree(objs).query(env.robot_state[who, :2])[0] < safe_m]
+        return objs, safe_m, who[tree.query(env.robot_state[who, :2])[0] < safe_m]
+
+    def _found_mines(self) -> tuple[np.ndarray, cKDTree | None]:
+        """Where the objects of the mark items are, in object order, and a k-d tree of them (kept
+        while the items and the objects stay the same)."""
+        env = self.env
+        key = (len(self.items), len(env.objects_m), id(env.objects_m))
+        if self._found_cache is None or self._found_cache[0] != key:
+            found = sorted({it.obj for it in self.items if it.kind == "mark"})
+            objs = env.objects_m[found]
+            self._found_cache = (key, objs, cKDTree(objs) if found else None)
+        return self._found_cache[1], self._found_cache[2]
 
     def _mark_due(self, it: WorkItem, free: np.ndarray) -> bool:
         """A mark is due once nobody is searching any more, or when the nearest robot free to take it
@@ -435,7 +461,7 @@ class ScriptedPolicy:
         env = self.env
         it.taken_by = i
         self._waiting.pop(i, None)
-        env._event("takeover", i, item=it.kind, role=it.role, obj=it.obj)
+        env.log_event("takeover", i, item=it.kind, role=it.role, obj=it.obj)
         if it.kind == "mark":
             env.set_command(i, MARK, env.objects_m[it.obj])
             return
@@ -456,7 +482,7 @@ class ScriptedPolicy:
         for i in np.flatnonzero(low):
             self._release_work(int(i), self._hearers(int(i)))
             env.set_command(int(i), RETURN)
-            env._event("battery_reserve", int(i))
+            env.log_event("battery_reserve", int(i))
 
     def lead_s(self) -> float:
         """How long before the detonation robots start clearing the standoff."""
@@ -504,7 +530,7 @@ class ScriptedPolicy:
         objs, safe_m, near = self._inside_standoff(np.flatnonzero(env.alive & env.on_map & (env.marking < 0)))
         if not len(near):
             return False
-        starts = np.array([env.router.snap(xy) for xy in env.robot_state[near, :2]])
+        starts = env.router.snap_many(env.robot_state[near, :2])
         far = self._safe_ground(objs, safe_m).distance_m(starts)
         far = far[np.isfinite(far)]
         if not len(far):

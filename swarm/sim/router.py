@@ -9,6 +9,8 @@ and a counter, so a run replays exactly.
 
 from __future__ import annotations
 
+import copy
+
 import numpy as np
 from scipy import ndimage
 
@@ -27,6 +29,13 @@ class Router:
         self.calls = 0
         _, (self._near_r, self._near_c) = ndimage.distance_transform_edt(cm.blocked, return_indices=True)
 
+    def fork(self) -> Router:
+        """A router sharing this one's map tables, with its own call counter from 0: one run's
+        replanning seeds, whatever other runs of a batch plan."""
+        other = copy.copy(self)
+        other.calls = 0
+        return other
+
     def snap(self, xy: np.ndarray) -> np.ndarray:
         """(x, y) if a robot may stand there, else the centre of the nearest free cell."""
         x, y = float(xy[0]), float(xy[1])
@@ -35,6 +44,17 @@ class Router:
         r, c = (int(v) for v in self.cm.cell_of(x, y))
         r2, c2 = int(self._near_r[r, c]), int(self._near_c[r, c])
         return np.array([float(v) for v in self.cm.center_of(r2, c2)])
+
+    def snap_many(self, xy: np.ndarray) -> np.ndarray:
+        """`snap` of each point of `xy` (k, 2), in one pass."""
+        xy = np.asarray(xy, dtype=np.float64).reshape(-1, 2)
+        out = xy.copy()
+        free = np.asarray(self.cm.is_free(xy[:, 0], xy[:, 1]), bool)
+        if not free.all():
+            r, c = self.cm.cell_of(xy[~free, 0], xy[~free, 1])
+            x, y = self.cm.center_of(self._near_r[r, c], self._near_c[r, c])
+            out[~free, 0], out[~free, 1] = x, y
+        return out
 
     def reachable(self, xy: np.ndarray) -> np.ndarray:
         """A target a robot can get to: itself if free or open water (it swims there), else the

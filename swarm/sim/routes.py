@@ -140,6 +140,68 @@ class Routes:
         length = self.end - self.start
         return np.where(length > 0, (self.cursor - self.start) / np.maximum(length, 1), 1.0)
 
+    def compact(self) -> None:
+        """Drop the points no robot's route holds any more (replaced routes): a batch that resets
+        its runs again and again (`swarm.sim.vector_env`) would otherwise grow without bound."""
+        length = self.end - self.start
+        base = np.concatenate([[0], np.cumsum(length)[:-1]]).astype(np.intp)
+        keep = np.repeat(self.start - base, length) + np.arange(int(length.sum()))
+        store = np.empty((max(256, 2 * len(keep)), 2))
+        store[: len(keep)] = self._store[keep]
+        shift = base - self.start
+        self.cursor += shift
+        self.sensing_from += shift
+        self.start[:] = base
+        self.end[:] = base + length
+        self._store, self._used = store, len(keep)
+        self.points = self._store[: self._used]
+
+    def view(self, offset: int, n: int) -> RoutesView:
+        """Robots offset .. offset + n - 1 as a `Routes` of their own (one run of a batch)."""
+        return RoutesView(self, offset, n)
+
+
+class RoutesView:
+    """One run's robots of a batch's `Routes`: the same methods, robot indices local to the run."""
+
+    def __init__(self, routes: Routes, offset: int, n: int) -> None:
+        self.base = routes
+        self.offset = offset
+        s = slice(offset, offset + n)
+        self.start, self.end = routes.start[s], routes.end[s]
+        self.cursor, self.sensing_from = routes.cursor[s], routes.sensing_from[s]
+
+    @property
+    def points(self) -> np.ndarray:
+        return self.base.points
+
+    def set(self, i: int, waypoints: np.ndarray, sensing_from: int | None = None) -> None:
+        self.base.set(self.offset + i, waypoints, sensing_from)
+
+    def steer_clear(self, i: int, xy: np.ndarray, avoid: np.ndarray, radius_m: float) -> None:
+        self.base.steer_clear(self.offset + i, xy, avoid, radius_m)
+
+    def clear(self, i: int) -> None:
+        self.base.clear(self.offset + i)
+
+    def done(self) -> np.ndarray:
+        return self.cursor >= self.end
+
+    def remaining(self, i: int) -> np.ndarray:
+        return self.base.remaining(self.offset + i)
+
+    def remaining_track(self, i: int) -> np.ndarray:
+        return self.base.remaining_track(self.offset + i)
+
+    def in_track(self) -> np.ndarray:
+        return (
+            (self.cursor >= self.sensing_from) & (self.cursor < self.end) & (self.sensing_from > self.start)
+        )
+
+    def progress(self) -> np.ndarray:
+        length = self.end - self.start
+        return np.where(length > 0, (self.cursor - self.start) / np.maximum(length, 1), 1.0)
+
 
 def clear_of(points: np.ndarray, avoid: np.ndarray, radius_m: float) -> tuple[np.ndarray, np.ndarray]:
     """`points` (a polyline) with a side-step around every point of `avoid` that a leg passes within

@@ -18,7 +18,7 @@ from __future__ import annotations
 import io
 import json
 from collections import Counter
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Literal
@@ -29,12 +29,15 @@ from pydantic import BaseModel, ConfigDict, Field, model_validator
 from swarm.errors import InputError
 from swarm.files import parse_json, read_npz, read_text, write_bytes_atomic, write_text_atomic
 from swarm.inputs import expected, validate
-from swarm.mission.plan import MissionPlan
+from swarm.mission.plan import MissionPlan, plan_mission
 from swarm.mission.schema import Mission
 from swarm.sim.env import SimConfig, SwarmEnv
 from swarm.sim.layout import PHASES, ROLES
 from swarm.sim.memory import RECORD_EVERY_S, check_fits
 from swarm.sim.policy import ScriptedPolicy
+from swarm.sim.runview import RunView
+from swarm.sim.setup import MissionSetup
+from swarm.sim.world import World
 
 #: The log's format version, written into outcome.json.
 LOG_VERSION = 1
@@ -159,26 +162,15 @@ def simulate(
     progress: Progress | None = None,
     on_step: Callable[[SwarmEnv], None] | None = None,
 ) -> MissionLog:
-    """Run the mission once with the scripted policy. `progress(t_s, time_limit_s)` is called as
-    simulated time passes; `on_step(env)` after every step (animation frames). A run that would
-    not fit in memory is refused before anything is allocated (`swarm.sim.memory`)."""
+    """Run the mission once with the scripted policy, through the PettingZoo adapter. `progress(t_s,
+    time_limit_s)` is called as simulated time passes; `on_step(env)` after every step (animation
+    frames). A run that would not fit in memory is refused before anything is allocated
+    (`swarm.sim.memory`). `simulate_batch` gives the same log for the same seed."""
     check_fits(mission, record_every_s=record_every_s)
     env = SwarmEnv(mission, action_mode="command", config=config, plan=plan)
     policy = ScriptedPolicy(env)
     env.reset(seed=seed)
-    n = env.n
-    times, xy, heading, alive, phase, role = [], [], [], [], [], []
-
-    def record() -> None:
-        on = env.alive & env.on_map
-        times.append(env.t_s)
-        xy.append(np.where(on[:, None], env.robot_state[:, :2], np.nan).astype(np.float32))
-        heading.append(env.robot_state[:, 2].astype(np.float32))
-        alive.append(env.alive.copy())
-        phase.append(env.phase.astype(np.int8))
-        role.append(env.role.astype(np.int8))
-
-    record()
+    rec = _Recorder(env.run)
     next_record = record_every_s
     completed_s: float | None = None
     while env.agents:
@@ -186,48 +178,137 @@ def simulate(
             next_record = max(next_record, env.t_s)
         policy.update()
         env.advance({})
-        if completed_s is None and env.score.outcome()["success"]:
+        if completed_s is None and env.score.success():
             completed_s = env.t_s
         if on_step is not None:
             on_step(env)
         if env.t_s + 1e-9 >= next_record or not env.agents:
-            record()
+            rec.record()
             next_record += record_every_s
         if progress is not None:
             progress(env.t_s, env.time_limit_s)
-    losses = [
-        {
-            "robot": ev["robot"],
-            "cause": ev["cause"],
-            "phase": ev["phase"],
-            "t_s": ev["t_s"],
-            "x_m": ev["x_m"],
-            "y_m": ev["y_m"],
-        }
-        for ev in env.events
-        if ev["kind"] == "loss"
+    return _log(env.run, mission, seed, rec, completed_s)
+
+
+def simulate_batch(
+    mission: Mission,
+    seeds: Sequence[int],
+    *,
+    plan: MissionPlan | None = None,
+    config: SimConfig | None = None,
+    record_every_s: float = RECORD_EVERY_S,
+    setup: MissionSetup | None = None,
+    progress: Callable[[int, int], None] | None = None,
+) -> list[MissionLog]:
+    """Run the mission once per seed with the scripted policy, all the runs stepped together on the
+    batched world core (`swarm.sim.world`): the same logs as `simulate` with each seed, bit for bit.
+    `setup` (a `MissionSetup` of this mission and plan, from an earlier batch) saves building it
+    again; `progress(runs_done, runs)` is called as runs finish."""
+    seeds = [int(s) for s in seeds]
+    if not seeds:
+        return []
+    check_fits(mission, record_every_s=record_every_s, batch=len(seeds))
+    config = config or SimConfig()
+    if setup is None:
+        plan = plan if plan is not None else plan_mission(mission, seed=mission.seed, workers=1)
+        setup = MissionSetup(mission, plan, dt_s=config.dt_s, substep_s=config.substep_s)
+    world = World(setup, len(seeds), comms_period_s=config.comms_period_s)
+    world.score_every_step = False  # only the outcome is wanted
+    world.reset(seeds)
+    runs = world.runs
+    policies = [ScriptedPolicy(run) for run in runs]
+    recs = [_Recorder(run) for run in runs]
+    next_record = [record_every_s] * len(runs)
+    completed: list[float | None] = [None] * len(runs)
+    live = list(range(len(runs)))
+    while live:
+        for b in live:
+            if world.fast_forward(b):
+                next_record[b] = max(next_record[b], runs[b].t_s)
+        for b in live:
+            policies[b].update()
+        wheels, jet = world.controller_commands()
+        ended, time_up, _ = world.advance(wheels, jet)
+        world.finish(ended, time_up)
+        still = []
+        for b in live:
+            run = runs[b]
+            t, going = run.t_s, run.running
+            if completed[b] is None and run.score.success():
+                completed[b] = t
+            if t + 1e-9 >= next_record[b] or not going:
+                recs[b].record()
+                next_record[b] += record_every_s
+            if going:
+                still.append(b)
+        if progress is not None and len(still) < len(live):
+            progress(len(runs) - len(still), len(runs))
+        live = still
+    return [
+        _log(run, mission, seed, rec, c)
+        for run, seed, rec, c in zip(runs, seeds, recs, completed, strict=True)
     ]
-    mf = env.minefield
+
+
+class _Recorder:
+    """Trajectory samples of one run (time, position, heading, liveness, phase, role)."""
+
+    def __init__(self, run: RunView) -> None:
+        self.run = run
+        self.times: list[float] = []
+        self.xy: list[np.ndarray] = []
+        self.heading: list[np.ndarray] = []
+        self.alive: list[np.ndarray] = []
+        self.phase: list[np.ndarray] = []
+        self.role: list[np.ndarray] = []
+        self.record()
+
+    def record(self) -> None:
+        run = self.run
+        on = run.alive & run.on_map
+        self.times.append(run.t_s)
+        self.xy.append(np.where(on[:, None], run.robot_state[:, :2], np.nan).astype(np.float32))
+        self.heading.append(run.robot_state[:, 2].astype(np.float32))
+        self.alive.append(run.alive.copy())
+        self.phase.append(run.phase.astype(np.int8))
+        self.role.append(run.role.astype(np.int8))
+
+
+#: What the log records of each loss (`MissionLog.losses`), from its "loss" event.
+LOSS_FIELDS = ("robot", "cause", "phase", "t_s", "x_m", "y_m")
+
+
+def losses_of(events: list[dict]) -> list[dict]:
+    """The log's losses: one record per "loss" event, `LOSS_FIELDS` (the one place they are made,
+    for a run just simulated and for a log read back)."""
+    return [{key: ev[key] for key in LOSS_FIELDS} for ev in events if ev.get("kind") == "loss"]
+
+
+def _log(run: RunView, mission: Mission, seed: int, rec: _Recorder, completed_s: float | None) -> MissionLog:
+    """The finished run's log: its samples, events, outcome and losses."""
+    n, k = run.n, len(rec.times)
+    losses = losses_of(run.events)
+    mf = run.minefield
     return MissionLog(
         mission=mission.name or "mission",
-        map=env.beach.name,
+        map=run.beach.name,
         seed=seed,
-        robots=list(env.possible_agents),
-        times_s=np.array(times),
-        xy_m=np.array(xy).reshape(len(times), n, 2),
-        heading_rad=np.array(heading).reshape(len(times), n),
-        alive=np.array(alive).reshape(len(times), n),
-        phase=np.array(phase).reshape(len(times), n),
-        role=np.array(role).reshape(len(times), n),
-        events=list(env.events),
-        outcome=env.outcome(),
+        robots=list(run.possible_agents),
+        times_s=np.array(rec.times),
+        xy_m=np.array(rec.xy).reshape(k, n, 2),
+        heading_rad=np.array(rec.heading).reshape(k, n),
+        alive=np.array(rec.alive).reshape(k, n),
+        phase=np.array(rec.phase).reshape(k, n),
+        role=np.array(rec.role).reshape(k, n),
+        events=list(run.events),
+        outcome=run.outcome(),
         losses=losses,
         mines_m=mf.positions_m.copy(),
-        mines_state={k: getattr(mf, k).tolist() for k in ("detected", "marked", "exploded", "cleared")},
-        objects_m=env.objects_m.copy(),
-        object_mine=env.object_mine.copy(),
-        plan=env.plan,
-        end_reasons=list(env.end_reason),
+        mines_state={key: getattr(mf, key).tolist() for key in ("detected", "marked", "exploded", "cleared")},
+        objects_m=run.objects_m.copy(),
+        object_mine=run.object_mine.copy(),
+        plan=run.plan,
+        end_reasons=list(run.end_reason),
         completed_s=completed_s,
     )
 
@@ -331,11 +412,7 @@ def read_log(out_dir: str | Path, plan: MissionPlan | None = None) -> MissionLog
             phase=arrays["phase"].reshape(len(times), n),
             events=events,
             outcome={"success": bool(summary["success"]), "criteria": summary["criteria"]},
-            losses=[
-                {k: ev[k] for k in ("robot", "cause", "phase", "t_s", "x_m", "y_m")}
-                for ev in events
-                if ev.get("kind") == "loss"
-            ],
+            losses=losses_of(events),
             mines_m=arrays["mines_m"].reshape(-1, 2),
             mines_state={k: list(v) for k, v in (summary.get("mines_state") or {}).items()},
             objects_m=arrays["objects_m"].reshape(-1, 2),

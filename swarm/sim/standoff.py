@@ -12,7 +12,6 @@ from __future__ import annotations
 import numpy as np
 from scipy.sparse import coo_matrix, csr_matrix
 from scipy.sparse.csgraph import dijkstra
-from scipy.spatial import cKDTree
 
 from swarm.planning.costmap import CostMap
 
@@ -42,6 +41,27 @@ def free_cell_graph(cm: CostMap) -> csr_matrix:
     return graph.tocsr()
 
 
+def near_any(cm: CostMap, objs: np.ndarray, radius_m: float) -> np.ndarray:
+    """(rows, cols) bool: cells whose centre lies closer than `radius_m` to a point of `objs`. Each
+    point looks only at the window of cells around it, with the distance a k-d tree computes
+    (the root of the summed squared differences), so the mask is the one a query of every cell
+    against a `cKDTree` of `objs` gives (`distance < radius_m`), at a fraction of its cost."""
+    out = np.zeros(cm.shape, bool)
+    nrows, ncols = cm.shape
+    for ox, oy in objs.tolist():
+        r0, c0 = (int(v) for v in cm.cell_of(ox - radius_m, oy - radius_m))
+        r1, c1 = (int(v) for v in cm.cell_of(ox + radius_m, oy + radius_m))
+        r0, c0 = max(r0 - 1, 0), max(c0 - 1, 0)
+        r1, c1 = min(r1 + 1, nrows - 1), min(c1 + 1, ncols - 1)
+        if r1 < r0 or c1 < c0:
+            continue
+        rr, cc = np.mgrid[r0 : r1 + 1, c0 : c1 + 1]
+        x, y = cm.center_of(rr, cc)
+        dx, dy = x - ox, y - oy
+        out[rr, cc] |= np.sqrt(dx * dx + dy * dy) < radius_m
+    return out
+
+
 class SafeGround:
     """Distances and paths over free ground to the nearest free cell at least `safe_m` from every
     point of `objs`; with `dry` (a cell mask), to the nearest such cell on dry ground when there is
@@ -57,9 +77,7 @@ class SafeGround:
     ) -> None:
         self.cm = cm
         rows, cols = np.nonzero(~cm.blocked)
-        x, y = cm.center_of(rows, cols)
-        clear = cKDTree(np.asarray(objs, dtype=np.float64).reshape(-1, 2)).query(np.column_stack([x, y]))[0]
-        safe = clear >= safe_m
+        safe = ~near_any(cm, np.asarray(objs, dtype=np.float64).reshape(-1, 2), safe_m)[rows, cols]
         if dry is not None and (safe & dry[rows, cols]).any():
             safe &= dry[rows, cols]
         sources = (rows * cm.shape[1] + cols)[safe]

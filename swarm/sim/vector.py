@@ -32,9 +32,11 @@ still in the mission:
   `(x - centre) / half_width`; `denormalize` inverts it. The bounds are loose for some columns
   (positions: four map extents; link counts: 1e4), so those use a small part of [-1, 1].
 
-Today the batch is B `SwarmEnv`s (or a subclass with its own task hooks, `env_class=`) stepped one
-after another through `SwarmEnv.step_arrays`, sharing one mission plan (planning is the expensive
-part of building an env): the batched world core replaces this loop, keeping this API.
+The B runs are one batched world (`swarm.sim.world.World`): one `advance` moves every robot of
+every run. The task is B `SwarmEnv`s (or a subclass with its own task hooks, `env_class=`) bound
+to the world's runs; the default task's observations (`swarm.sim.observe`) and rewards are
+computed for all runs at once, a subclass's hooks run by run. Either way run b's results are those
+of a lone `SwarmEnv` reset with its seed, bit for bit.
 """
 
 from __future__ import annotations
@@ -48,7 +50,9 @@ import numpy as np
 from swarm.errors import SwarmError
 from swarm.mission.plan import MissionPlan
 from swarm.mission.schema import Mission
-from swarm.sim.env import COMMANDS, SimConfig, SwarmEnv
+from swarm.sim.env import COMMANDS, SimConfig, StepOutcome, SwarmEnv
+from swarm.sim.observe import Observer
+from swarm.sim.world import World
 
 
 def episode_seed(seed: int, run: int, episode: int) -> int:
@@ -82,7 +86,20 @@ class SwarmVectorEnv:
             raise SwarmError(f"sim: num_envs {num_envs}, expected at least 1")
         opts = {"action_mode": action_mode, "config": config, "max_cycles": max_cycles}
         first = env_class(mission, overrides, plan=plan, plan_workers=plan_workers, **opts)
-        self.envs = [first] + [env_class(first.mission, plan=first.plan, **opts) for _ in range(num_envs - 1)]
+        cfg = first.config
+        self.world = World(first.setup, num_envs, comms_period_s=cfg.comms_period_s, max_cycles=max_cycles)
+        self.envs = [
+            env_class(first.mission, setup=first.setup, world=self.world, run=b, **opts)
+            for b in range(num_envs)
+        ]
+        kind = type(self.envs[0])
+        #: The default task's hooks run for every run at once (`swarm.sim.observe`); a subclass's
+        #: overridden hooks run by run.
+        self._batched_observe = kind.observe is SwarmEnv.observe and kind._observe is SwarmEnv._observe
+        self._batched_reward = kind.reward is SwarmEnv.reward
+        self._batched_terminated = kind.terminated is SwarmEnv.terminated
+        self.observer = Observer(first.setup, first.layout, num_envs)
+        self.limits = first.limits
         self.num_envs = num_envs
         self.n = first.n
         self.possible_agents = list(first.possible_agents)
@@ -130,19 +147,49 @@ class SwarmVectorEnv:
         """(B,) the seed of each run's current episode (`SwarmEnv.reset(seed=...)` replays it)."""
         return self._seeds.copy()
 
-    def _reset_run(self, b: int) -> np.ndarray:
-        """Start run b's next episode; returns its observations (n, obs_dim), raw."""
+    def _reset_runs(self, runs: list[int]) -> np.ndarray:
+        """Start runs `runs` on their next episodes; returns their observations (len(runs), n,
+        obs_dim), raw. The world's runs are reset together, then each run's env through its own
+        `reset_arrays` (a subclass that keeps state of its own resets it there, as alone)."""
         assert self._root is not None
-        s = episode_seed(self._root, b, int(self._episode[b]))
-        self._episode[b] += 1
-        self._seeds[b] = s
-        env = self.envs[b]
-        obs = env.reset_arrays(s)
-        self._active[b] = False
-        self._active[b, [env.agent_index[a] for a in env.agents]] = True
-        self._returns[b] = 0.0
-        self._lengths[b] = 0
-        return obs
+        seeds = []
+        for b in runs:
+            s = episode_seed(self._root, b, int(self._episode[b]))
+            self._episode[b] += 1
+            self._seeds[b] = s
+            seeds.append(s)
+        self.world.reset(seeds, runs=runs)
+        obs = []
+        for b, s in zip(runs, seeds, strict=True):
+            obs.append(self.envs[b].reset_arrays(s))
+            self.observer.reset_run(b)
+            self._active[b] = self.world.in_agents[b]
+            self._returns[b] = 0.0
+            self._lengths[b] = 0
+        return np.stack(obs)
+
+    def _observe(self, runs: list[int]) -> np.ndarray:
+        """The task's observations of runs `runs` (len(runs), n, obs_dim), raw."""
+        if self._batched_observe:
+            return self.observer.observe(self.world, runs)
+        return np.stack([self.envs[b].observe() for b in runs])
+
+    def _commands(self, actions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Wheel (B, n, 2) and jet (B, n) commands from the actions of the robots in the mission."""
+        inside = self.world.in_agents
+        if self.action_mode == "command":
+            for b, env in enumerate(self.envs):
+                idx = np.flatnonzero(inside[b])
+                for i, (cmd, tx, ty) in zip(idx.tolist(), actions[b, idx].tolist(), strict=True):
+                    env.set_command(i, int(cmd), np.array([tx, ty]))
+            return self.world.controller_commands()
+        lim = self.limits
+        act = np.clip(actions.astype(np.float64), -1.0, 1.0)
+        wheels = np.where(
+            inside[..., None], act[..., :2] * (lim.max_wheel_speed_mps / lim.wheel_radius_m), 0.0
+        )
+        jet = np.where(inside, act[..., 2] * lim.jet_thrust_max_n, 0.0)
+        return wheels, jet
 
     # the API ------------------------------------------------------------------------------------
     def reset(self, seed: int | None = None, options: dict | None = None) -> tuple[np.ndarray, dict]:
@@ -153,7 +200,7 @@ class SwarmVectorEnv:
             self._root, self._episode[:] = int(seed), 0
         elif self._root is None:
             self._root = self.seed if self.seed is not None else int(np.random.SeedSequence().entropy)
-        obs = np.stack([self._reset_run(b) for b in range(self.num_envs)])
+        obs = self._reset_runs(list(range(self.num_envs)))
         obs = self._finish_obs(obs, self._active)
         return obs, {"agent_mask": self._active.copy(), "episode_seed": self.episode_seeds}
 
@@ -167,13 +214,29 @@ class SwarmVectorEnv:
         shape = (self.num_envs, self.n, 3)
         if actions.shape != shape:
             raise SwarmError(f"sim: actions of shape {actions.shape}, expected {shape}")
-        b, n = self.num_envs, self.n
-        obs = np.empty((b, n, self.obs_dim), np.float32)
-        rewards = np.empty((b, n))
-        terminated = np.empty((b, n), bool)
-        truncated = np.empty((b, n), bool)
-        for k, env in enumerate(self.envs):
-            obs[k], rewards[k], terminated[k], truncated[k] = env.step_arrays(actions[k])
+        b = self.num_envs
+        was_in = self.world.in_agents.copy()
+        ended, time_up, change = self.world.advance(*self._commands(actions))
+        runs = list(range(b))
+        obs = self._observe(runs)
+        obs[~was_in] = 0.0
+        outcomes = [StepOutcome(float(change[k]), ended[k], bool(time_up[k])) for k in runs]
+        if self._batched_reward:
+            rewards = np.where(was_in, change[:, None], 0.0)
+        else:
+            hooks = [
+                np.asarray(env.reward(o), np.float64) for env, o in zip(self.envs, outcomes, strict=True)
+            ]
+            rewards = np.where(was_in, np.stack(hooks), 0.0)
+        if self._batched_terminated:
+            terminated = ended & was_in
+        else:
+            hooks = [np.asarray(env.terminated(o), bool) for env, o in zip(self.envs, outcomes, strict=True)]
+            terminated = np.stack(hooks) & was_in
+        truncated = was_in & ~terminated & time_up[:, None]
+        self.world.finish(terminated, time_up)
+        for env in self.envs:
+            env.synced()
         was_active = self._active.copy()
         self._returns += rewards
         self._lengths += 1
@@ -182,16 +245,16 @@ class SwarmVectorEnv:
         infos: dict[str, Any] = {}
         if done.any():
             final = self._finish_obs(obs, was_active)
-            runs = np.flatnonzero(done)
+            runs_done = np.flatnonzero(done)
             infos["final_obs"] = np.where(done[:, None, None], final, np.float32(0.0))
             infos["episode"] = {
                 "r": np.where(done[:, None], self._returns, 0.0),
                 "l": np.where(done, self._lengths, 0),
             }
             outcome = np.full(b, None, dtype=object)
-            for k in runs.tolist():
+            for k in runs_done.tolist():
                 outcome[k] = self.envs[k].outcome()
-                obs[k] = self._reset_run(k)
+            obs[runs_done] = self._reset_runs(runs_done.tolist())
             infos["outcome"] = outcome
             for key in ("final_obs", "episode", "outcome"):
                 infos[f"_{key}"] = done.copy()

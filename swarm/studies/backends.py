@@ -5,21 +5,49 @@ Both take the same `RunTask`s and yield the same rows, as runs finish (in any or
 in the tasks, so which backend, how many workers and the order make no difference to the table.
 Processes, not threads: the simulator is numpy-heavy Python, and OMPL (planning a point) holds the
 GIL. Local workers start with the "forkserver" method, which never forks a process with threads.
+
+Each worker runs its share of a point's runs in batches (`batches`, `runner.run_batch`): B runs
+stepped together on the batched world core cost little more than one, and give the same rows.
 """
 
 from __future__ import annotations
 
+import math
 import multiprocessing
 import os
 from collections.abc import Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 
 from swarm.errors import InputError, SwarmError
-from swarm.studies.runner import RunTask, run_task
+from swarm.studies.runner import RunTask, run_batch
 
 BACKENDS = ("local", "ray")
 #: Times Ray runs a task again after the process running it died.
 RAY_RETRIES = 3
+#: The automatic batch size: at most this many runs, and this many robots over all its runs (past
+#: a few thousand robots a step's numpy work outweighs its Python overhead: batching gains little).
+AUTO_BATCH_RUNS = 32
+AUTO_BATCH_ROBOTS = 4096
+
+
+def auto_batch(runs: int, workers: int, robots: int) -> int:
+    """The batch size for `runs` runs of a point of `robots` robots shared by `workers` workers:
+    each worker's share in one batch, within `AUTO_BATCH_RUNS` and `AUTO_BATCH_ROBOTS`."""
+    share = math.ceil(runs / max(1, workers))
+    return max(1, min(share, AUTO_BATCH_RUNS, AUTO_BATCH_ROBOTS // max(1, robots)))
+
+
+def batches(tasks: Sequence[RunTask], size: int | dict[int, int]) -> list[list[RunTask]]:
+    """`tasks` in batches of at most `size` runs (or `size[point]`), each of one point, in order."""
+    out: list[list[RunTask]] = []
+    for task in tasks:
+        cap = size if isinstance(size, int) else size.get(task.point, 1)
+        last = out[-1] if out else None
+        if last is not None and last[0].point == task.point and len(last) < max(1, cap):
+            last.append(task)
+        else:
+            out.append([task])
+    return out
 
 
 def default_workers() -> int:
@@ -30,31 +58,36 @@ def default_workers() -> int:
         return max(1, os.cpu_count() or 1)
 
 
-def run_local(tasks: Sequence[RunTask], workers: int) -> Iterator[dict]:
-    """Rows as runs finish on `workers` processes (1: in this process, in order)."""
+def run_local(tasks: Sequence[RunTask], workers: int, batch: int | dict[int, int] = 1) -> Iterator[dict]:
+    """Rows as runs finish on `workers` processes (1: in this process, in order), in batches of
+    `batch` runs of a point (or `batch[point]`; 1: one run at a time)."""
+    groups = batches(tasks, batch)
     if workers <= 1:
-        for task in tasks:
-            yield run_task(task)
+        for group in groups:
+            yield from run_batch(group)
         return
     context = multiprocessing.get_context("forkserver")
-    pending = list(reversed(tasks))
+    pending = list(reversed(groups))
     with ProcessPoolExecutor(max_workers=workers, mp_context=context) as pool:
         running: set[Future] = set()
         try:
             while pending or running:
                 while pending and len(running) < 2 * workers:  # a short queue: a kill loses little
-                    running.add(pool.submit(run_task, pending.pop()))
+                    running.add(pool.submit(run_batch, pending.pop()))
                 finished, running = wait(running, return_when=FIRST_COMPLETED)
                 for future in finished:
-                    yield future.result()
+                    yield from future.result()
         except BaseException:  # Ctrl-C or a failed run: stop now, do not wait for the queue
             pool.shutdown(wait=False, cancel_futures=True)
             raise
 
 
-def run_ray(tasks: Sequence[RunTask], workers: int | None, address: str | None) -> Iterator[dict]:
+def run_ray(
+    tasks: Sequence[RunTask], workers: int | None, address: str | None, batch: int | dict[int, int] = 1
+) -> Iterator[dict]:
     """Rows as runs finish on a Ray cluster (`address`, e.g. "auto" or "ray://host:10001"), or on a
-    local Ray instance started here (`workers` CPUs) when no address is given."""
+    local Ray instance started here (`workers` CPUs) when no address is given; in batches as
+    `run_local`."""
     try:
         import ray
     except ImportError:
@@ -72,16 +105,16 @@ def run_ray(tasks: Sequence[RunTask], workers: int | None, address: str | None) 
     try:
         # a worker that dies (kill -9, out of memory, a lost node) has its run retried elsewhere:
         # the run's seed is in its task, so the retry gives the same row
-        remote = ray.remote(num_cpus=1, max_retries=RAY_RETRIES, retry_exceptions=False)(run_task)
+        remote = ray.remote(num_cpus=1, max_retries=RAY_RETRIES, retry_exceptions=False)(run_batch)
         in_flight = max(2, 2 * int(ray.cluster_resources().get("CPU", 1)))
-        pending = list(reversed(tasks))
+        pending = list(reversed(batches(tasks, batch)))
         running: list = []
         while pending or running:
             while pending and len(running) < in_flight:
                 running.append(remote.remote(pending.pop()))
             done, running = ray.wait(running, num_returns=1)
             for ref in done:
-                yield ray.get(ref)
+                yield from ray.get(ref)
     except ray.exceptions.RayError as exc:
         raise SwarmError(f"study: the Ray backend failed: {exc}") from None
     finally:

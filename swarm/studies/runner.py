@@ -7,6 +7,10 @@ one process, on many, or on a Ray cluster, and resuming reruns exactly the missi
 
 Workers keep the mission and its plan of each point they have seen (`_prepared`): planning a
 point's routes (seconds for a large swarm) happens once per worker, not once per run.
+
+`run_batch` runs several runs of one point together on the batched world core
+(`swarm.sim.world`, `simulate_batch`): the same rows as `run_task` one by one (a run's result does
+not depend on the batch it is in), each with its share of the batch's wall time as `runtime_s`.
 """
 
 from __future__ import annotations
@@ -20,7 +24,7 @@ from functools import lru_cache
 import numpy as np
 
 from swarm.sim.hazards import CAUSES
-from swarm.studies.table import CRITERIA
+from swarm.studies.table import CRITERIA, loss_row
 
 #: Points whose mission and plan a worker keeps.
 PREPARED_CACHE = 16
@@ -52,6 +56,17 @@ def _prepared(mission_path: str, overrides: tuple[tuple[str, object], ...]):
     return mission, plan_mission(mission, seed=mission.seed, workers=1)
 
 
+@lru_cache(maxsize=PREPARED_CACHE)
+def _setup(mission_path: str, overrides: tuple[tuple[str, object], ...]):
+    """The point's `MissionSetup` (what every batch of its runs shares), kept like its plan."""
+    from swarm.sim.env import SimConfig
+    from swarm.sim.setup import MissionSetup
+
+    mission, plan = _prepared(mission_path, overrides)
+    config = SimConfig()
+    return MissionSetup(mission, plan, dt_s=config.dt_s, substep_s=config.substep_s)
+
+
 def run_task(task: RunTask) -> dict:
     """Simulate one run and return its row (column name -> value)."""
     from swarm.sim.run import simulate
@@ -59,6 +74,32 @@ def run_task(task: RunTask) -> dict:
     started = time.perf_counter()
     mission, plan = _prepared(task.mission_path, task.overrides)
     log = simulate(mission, seed=task.seed, plan=plan, record_every_s=math.inf)
+    return _row(task, mission, log, time.perf_counter() - started)
+
+
+def run_batch(tasks: list[RunTask]) -> list[dict]:
+    """Simulate runs of one point together on the batched core and return their rows, in order
+    (one task: `run_task`, the one-run path)."""
+    from swarm.sim.run import simulate_batch
+
+    if len(tasks) == 1:
+        return [run_task(tasks[0])]
+    first = tasks[0]
+    if any(
+        (t.mission_path, t.point, t.overrides) != (first.mission_path, first.point, first.overrides)
+        for t in tasks
+    ):
+        raise ValueError("study: a batch holds runs of one point")
+    started = time.perf_counter()
+    mission, plan = _prepared(first.mission_path, first.overrides)
+    setup = _setup(first.mission_path, first.overrides)
+    logs = simulate_batch(mission, [t.seed for t in tasks], plan=plan, setup=setup, record_every_s=math.inf)
+    share = (time.perf_counter() - started) / len(tasks)
+    return [_row(t, mission, log, share) for t, log in zip(tasks, logs, strict=True)]
+
+
+def _row(task: RunTask, mission, log, runtime_s: float) -> dict:
+    """One run's row of the results table."""
     row: dict = {"point": task.point, "run": task.run, "seed": task.seed}
     row.update(dict(task.overrides))
     row["robots"] = mission.swarm.count
@@ -72,17 +113,8 @@ def run_task(task: RunTask) -> dict:
     row["lost"] = len(log.losses)
     for c in CAUSES:
         row[f"lost_{c}"] = causes.get(c, 0)
-    row["losses"] = [
-        {
-            "cause": x["cause"],
-            "phase": x["phase"],
-            "t_s": float(x["t_s"]),
-            "x_m": float(x["x_m"]),
-            "y_m": float(x["y_m"]),
-        }
-        for x in log.losses
-    ]
+    row["losses"] = [loss_row(x) for x in log.losses]
     row["completed_s"] = None if log.completed_s is None else float(log.completed_s)
     row["duration_s"] = float(log.times_s[-1]) if len(log.times_s) else 0.0
-    row["runtime_s"] = time.perf_counter() - started
+    row["runtime_s"] = runtime_s
     return row

@@ -97,17 +97,23 @@ def run_study(
     workers: int | None = None,
     address: str | None = None,
     progress: Progress | None = None,
+    batch: int | None = None,
 ) -> tuple[pa.Table, dict]:
     """Run what is missing of the study in `out`, then write results.parquet and summary.json.
 
-    `progress(done, total)` is called as runs finish (`done` counts runs found from before). The
-    folder is locked while the study writes it: a second study into it raises `FolderBusy`."""
+    Each worker runs its runs of a point in batches of `batch` runs on the batched world core
+    (`swarm.sim.world`; 1: one at a time; None: `backends.auto_batch`): the same table either way
+    (apart from `runtime_s`). `progress(done, total)` is called as runs finish (`done` counts runs
+    found from before). The folder is locked while the study writes it: a second study into it
+    raises `FolderBusy`."""
     if backend not in backends.BACKENDS:
         raise SwarmError(f"study: backend {backend!r}, expected one of {list(backends.BACKENDS)}")
+    if batch is not None and batch < 1:
+        raise SwarmError(f"study: batch must be >= 1, found {batch}")
     at_once = (workers or backends.default_workers()) if backend == "local" else 1
     check_points(spec.mission_path, spec.sweeps, at_once=at_once)
     with folder_lock(out):
-        return _run_locked(spec, Path(out), backend, workers, address, progress)
+        return _run_locked(spec, Path(out), backend, workers, address, progress, batch)
 
 
 def _run_locked(
@@ -117,6 +123,7 @@ def _run_locked(
     workers: int | None,
     address: str | None,
     progress: Progress | None,
+    batch: int | None = None,
 ) -> tuple[pa.Table, dict]:
     store = ResultStore(out, spec.table_schema())
     store.open(spec.as_dict())
@@ -126,10 +133,11 @@ def _run_locked(
     if progress is not None:
         progress(total - len(tasks), total)
     n_workers = workers or backends.default_workers()
+    sizes = _batch_sizes(spec, tasks, batch, n_workers)
     if backend == "local":
-        rows = backends.run_local(tasks, n_workers)
+        rows = backends.run_local(tasks, n_workers, sizes)
     else:
-        rows = backends.run_ray(tasks, workers, address)
+        rows = backends.run_ray(tasks, workers, address, sizes)
     buffer: list[dict] = []
     finished = total - len(tasks)
     chunk = max(1, min(CHUNK_RUNS, len(tasks) // (4 * n_workers) or 1))
@@ -158,6 +166,22 @@ def _run_locked(
     )
     write_text_atomic(out / "summary.json", json.dumps(summary, indent=1, sort_keys=True) + "\n")
     return table, summary
+
+
+def _batch_sizes(spec: StudySpec, tasks: list[RunTask], batch: int | None, workers: int) -> dict[int, int]:
+    """Runs per batch at each point: `batch`, or automatic from the runs left at the point, the
+    workers and the point's swarm size (`backends.auto_batch`)."""
+    from swarm.mission.load import load_mission
+
+    left = Counter(t.point for t in tasks)
+    if batch is not None:
+        return {p: batch for p in left}
+    pts = spec.points()
+    out = {}
+    for p, runs in left.items():
+        robots = load_mission(spec.mission_path, pts[p], overrides_source="--sweep").swarm.count
+        out[p] = backends.auto_batch(runs, workers, robots)
+    return out
 
 
 def summarize(spec: StudySpec, table: pa.Table) -> dict:

@@ -17,8 +17,8 @@ Columns, in order:
   y_m: float64): every loss, for loss maps and losses by phase.
 - ``completed_s`` (float64): mission time when every criterion was first met; null if never.
 - ``duration_s`` (float64): mission time simulated.
-- ``runtime_s`` (float64): wall-clock seconds the run took (the only column that differs between
-  two runs of the same study).
+- ``runtime_s`` (float64): wall-clock seconds the run took, its share of its batch's when it ran in
+  a batch (the only column that differs between two runs of the same study).
 """
 
 from __future__ import annotations
@@ -41,6 +41,18 @@ LOSS = pa.struct(
 )
 #: Columns that may differ between two runs of the same study (wall-clock time).
 VOLATILE = ("runtime_s",)
+
+
+def loss_row(loss: dict) -> dict:
+    """A loss of the log (`swarm.sim.run.LOSS_FIELDS`) as the table's `losses` holds it: cause,
+    phase, time and place (the robot's name is not kept)."""
+    return {
+        "cause": loss["cause"],
+        "phase": loss["phase"],
+        "t_s": float(loss["t_s"]),
+        "x_m": float(loss["x_m"]),
+        "y_m": float(loss["y_m"]),
+    }
 
 
 def schema(sweep_types: Sequence[tuple[str, pa.DataType]]) -> pa.Schema:

@@ -16,10 +16,9 @@ import pytest
 
 from swarm.errors import InputError
 from swarm.mission import mission_from_dict
-from swarm.mission.plan import plan_json, plan_mission, write_plan
+from swarm.mission.plan import MissionPlan, plan_json, plan_mission, write_plan
 from swarm.planning.radio import comm_range_m, link_margin_db
 from swarm.report import build_report
-from swarm.report.load import plan_from_dict
 from swarm.report.plan_report import NO_VERDICT, plan_data
 from swarm.report.validation_report import Validation, read_validation, validation_data, write_validation
 from swarm.robot.predict import Trajectory
@@ -165,7 +164,7 @@ def test_an_npy_header_numpy_cannot_parse_is_one_line(log_folder, tmp_path):
 
 def test_plan_rebuilt_from_plan_json_is_the_plan(plan, tmp_path):
     data = json.loads(plan_json(plan))
-    back = plan_from_dict(data, plan.beach_map)
+    back = MissionPlan.from_dict(data, plan.beach_map)
     again = back.as_dict()
     for key in ("robots", "search", "relay", "source", "criteria", "mission", "map", "seed"):
         assert again[key] == data[key], key

@@ -189,6 +189,34 @@ def test_a_subclassed_task_runs_batched(missions: dict[str, Path]) -> None:
     np.testing.assert_array_equal(rew, -np.stack([e.robot_state[:, 0] for e in vec.envs]))
 
 
+def test_a_subclass_resets_its_own_state_on_autoreset(missions: dict[str, Path]) -> None:
+    """A task that keeps state resets it in `reset_arrays`, alone and in the batch's autoreset."""
+
+    class Counting(SwarmEnv):
+        def observation_box(self) -> gymnasium.spaces.Box:
+            return gymnasium.spaces.Box(0.0, 1e6, (1,), np.float32)
+
+        def reset_arrays(self, seed: int | None = None) -> np.ndarray:
+            self.looks = 0
+            return super().reset_arrays(seed)
+
+        def observe(self) -> np.ndarray:
+            self.looks = getattr(self, "looks", 0) + 1
+            return np.full((self.n, 1), self.looks, np.float32)
+
+    vec = swarm.sim.vector_env(
+        mission=missions["hazardous"], num_envs=2, seed=1, max_cycles=3, env_class=Counting
+    )
+    obs, _ = vec.reset()
+    assert (obs == 1).all()
+    for _ in range(3):
+        obs, _, _, trunc, infos = vec.step(np.zeros((2, ROBOTS, 3)))
+    assert infos["_final_obs"].all() and (trunc | ~infos["agent_mask"]).any()
+    rows = infos["agent_mask"]
+    assert (obs[rows] == 1).all(), "the new episode's first observation counts from the reset"
+    assert (infos["final_obs"][:, :, 0].max(axis=1) == 4).all()
+
+
 def test_bad_calls_say_what_was_expected(missions: dict[str, Path]) -> None:
     with pytest.raises(SwarmError, match="num_envs 0, expected at least 1"):
         swarm.sim.vector_env(mission=missions["hazardous"], num_envs=0)

@@ -133,6 +133,38 @@ def test_a_study_killed_mid_way_resumes_to_the_same_table(reference, tiny, tmp_p
     assert _stable(pq.read_table(out / "results.parquet")).equals(_stable(expected))
 
 
+def test_the_table_is_the_same_one_run_at_a_time_and_in_batches(tiny, tmp_path) -> None:
+    """`--batch 1` runs each run alone (the PettingZoo adapter); `--batch 3` and `--batch 2` step a
+    worker's runs of a point together on the batched core (a batch of 2 and one of 1 at a point
+    of 3 runs): the same rows, apart from the wall-clock runtime."""
+    spec = StudySpec(str(tiny), runs=3, sweeps=parse_sweeps(["swarm.count=2,3"]), seed=11)
+    one, _ = run_study(spec, tmp_path / "one", workers=1, batch=1)
+    assert one.num_rows == 6 and sum(one.column("lost").to_pylist()) > 0  # losses to tell runs apart
+    for b in (3, 2):
+        batched, _ = run_study(spec, tmp_path / f"b{b}", workers=1, batch=b)
+        assert _stable(batched).equals(_stable(one)), b
+
+
+def test_batches_hold_runs_of_one_point_up_to_their_size(tiny) -> None:
+    spec = StudySpec(str(tiny), runs=5, sweeps=parse_sweeps(["swarm.count=2,3"]), seed=1)
+    groups = backends.batches(spec.tasks(), {0: 2, 1: 5})
+    assert [[(t.point, t.run) for t in g] for g in groups] == [
+        [(0, 0), (0, 1)], [(0, 2), (0, 3)], [(0, 4)], [(1, 0), (1, 1), (1, 2), (1, 3), (1, 4)]
+    ]  # fmt: skip
+    assert backends.auto_batch(100, 2, 24) == 32
+    assert backends.auto_batch(10, 4, 24) == 3
+    assert backends.auto_batch(100, 1, 1000) == 4
+    assert backends.auto_batch(5, 1, 100_000) == 1
+
+
+@pytest.mark.slow
+def test_the_ray_backend_gives_the_same_table_in_batches(reference, tmp_path) -> None:
+    pytest.importorskip("ray")  # the `ray` extra; CI installs it
+    spec, table = reference
+    batched, _ = run_study(spec, tmp_path / "ray", backend="ray", workers=2, batch=2)
+    assert _stable(batched).equals(_stable(table))
+
+
 @pytest.mark.slow
 def test_the_ray_backend_gives_the_same_table(reference, tmp_path) -> None:
     pytest.importorskip("ray")  # the `ray` extra; CI installs it
@@ -218,6 +250,17 @@ def test_a_bad_sweep_is_one_line_naming_the_key(tiny, tmp_path, sweep, names) ->
     lines = err.getvalue().strip().splitlines()
     assert len(lines) == 1 and names in lines[0] and "Traceback" not in err.getvalue()
     assert not out.exists()  # nothing written
+
+
+def test_a_bad_batch_is_one_line_and_a_good_one_runs_in_batches(tiny, tmp_path) -> None:
+    err = io.StringIO()
+    with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
+        code = main(["study", str(tiny), "--runs", "2", "--batch", "0", "--out", str(tmp_path / "bad")])
+    assert code == 2 and "--batch" in err.getvalue() and len(err.getvalue().strip().splitlines()) == 1
+    out = tmp_path / "good"
+    with contextlib.redirect_stderr(io.StringIO()), contextlib.redirect_stdout(io.StringIO()):
+        code = main(["study", str(tiny), "--runs", "2", "--batch", "2", "--workers", "1", "--out", str(out)])
+    assert code == 0 and pq.read_table(out / "results.parquet").num_rows == 2
 
 
 @pytest.mark.slow
@@ -397,7 +440,7 @@ def test_a_ray_worker_killed_mid_study_is_retried_to_the_same_table(reference, t
         while not stop.is_set() and not killed:
             for pid in _descendants(os.getpid()):
                 with contextlib.suppress(OSError):
-                    if Path(f"/proc/{pid}/cmdline").read_bytes().startswith(b"ray::run_task"):
+                    if Path(f"/proc/{pid}/cmdline").read_bytes().startswith(b"ray::run_batch"):
                         os.kill(pid, signal.SIGKILL)
                         killed.append(pid)
                         break

@@ -1,0 +1,227 @@
+"""The default task's observation (`swarm.sim.layout`: 106 floats per robot by default) of any runs
+of a batch (`swarm.sim.world.World`) at once.
+
+Everything that is per robot (own state, the terrain patch in the body frame, links, the task's
+goal and progress) is computed over all the runs' robots in one pass; what depends on a run's own
+objects (its radio neighbour tables, the nearest object still to mark, its clock) run by run. The
+numbers are the same for a run whether it is observed alone (`SwarmEnv`, B = 1) or with others
+(`swarm.sim.vector_env`): every operation is elementwise over robots.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from swarm.sim.control import to_body
+from swarm.sim.layout import ELEVATION_CLIP_M, ROLES, ObservationLayout
+from swarm.sim.runview import FOLLOW, RETURN
+from swarm.sim.setup import MissionSetup
+
+#: Up to this many point pairs, nearest neighbours come from a dense distance matrix (faster
+#: than building a k-d tree for a handful of objects).
+DENSE_NEAREST_PAIRS = 200_000
+
+
+class _Neighbours:
+    """One run's radio neighbour tables, kept between radio updates (`Observer._table`)."""
+
+    def __init__(self, n: int, k: int) -> None:
+        self.signature: tuple[int, int] | None = None
+        self.table = np.full((n, k), -1, dtype=np.intp)
+        self.linked = np.zeros((n, k), bool)
+        self.keys_version = -1
+        self.keys = np.empty(0, dtype=np.int64)
+
+
+class Observer:
+    """The default observation of the runs of one batch (module docstring)."""
+
+    def __init__(self, setup: MissionSetup, layout: ObservationLayout, runs: int) -> None:
+        self.setup = setup
+        self.layout = layout
+        self.n = setup.n
+        self.capacity_wh = setup.capacity_wh
+        k, h = layout.patch_size, layout.patch_spacing_m
+        offs = (np.arange(k) - (k - 1) / 2) * h
+        fx, fy = np.meshgrid(offs, offs, indexing="ij")
+        #: Body-frame sample offsets of the terrain patch (rows forward, columns left), flattened.
+        self.patch_offsets = (fx.ravel(), fy.ravel())
+        bm = setup.beach
+        #: (cells, 2) float32: speed fraction and elevation of every cell, row-major.
+        self.patch_grid = np.column_stack([setup.speed_grid.ravel(), bm.elevation_m.ravel()]).astype(
+            np.float32
+        )
+        self._nb: dict[int, _Neighbours] = {}  # per observed run, made when first needed
+
+    def reset_run(self, b: int) -> None:
+        """Forget run b's neighbour tables (a new episode)."""
+        self._nb.pop(b, None)
+
+    def _neighbours_of(self, b: int) -> _Neighbours:
+        nb = self._nb.get(b)
+        if nb is None:
+            nb = self._nb[b] = _Neighbours(self.n, self.layout.neighbours)
+        return nb
+
+    def flat_cell(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        """Row-major index of the cell under each point (the nearest edge cell outside the map)."""
+        bm = self.setup.beach
+        rows, cols = bm.shape
+        c = np.clip(((x - bm.origin_m[0]) / bm.cell_m).astype(np.intp), 0, cols - 1)
+        r = np.clip(((y - bm.origin_m[1]) / bm.cell_m).astype(np.intp), 0, rows - 1)
+        return r * cols + c
+
+    def observe(self, world, runs: list[int]) -> np.ndarray:
+        """(len(runs), n, obs_dim) float32: every robot's observation in runs `runs` now."""
+        n, lay, r = self.n, self.layout, len(runs)
+        every = runs == list(range(world.B))
+
+        def pick(a: np.ndarray) -> np.ndarray:
+            a = a if every else a[runs]
+            return a.reshape(r * n, *a.shape[2:])
+
+        m = r * n
+        out = np.zeros((m, lay.size), np.float32)
+        sl = lay.slices
+        s = pick(world.robot_state)
+        heading = s[:, 2]
+        c, si = np.cos(heading), np.sin(heading)
+        own = out[:, sl["own"]]
+        own[:, 0:2] = s[:, :2]
+        own[:, 2] = c
+        own[:, 3] = si
+        own[:, 4:7] = s[:, 3:6]
+        own[:, 7] = pick(world.energy_wh)
+        own[:, 8] = pick(world.inverted)
+        own[:, 9] = pick(world.submersion)
+        own[:, 10] = pick(world.slip)
+        np.clip(own[:, 7:8], 0.0, self.capacity_wh, out=own[:, 7:8])
+        own[:, 7] /= self.capacity_wh
+        np.clip(own[:, 10], 0.0, 1.0, out=own[:, 10])
+        own[np.arange(m), 11 + pick(world.phase)] = 1.0
+        # terrain patch in the body frame: one gather of (speed, elevation) per sample
+        fx, fy = self.patch_offsets
+        c, si = c[:, None], si[:, None]
+        px = s[:, 0:1] + c * fx - si * fy
+        py = s[:, 1:2] + si * fx + c * fy
+        patch = self.patch_grid[self.flat_cell(px, py)]  # (m, k*k, 2)
+        k = lay.patch_size
+        # the middle sample of an odd patch is the robot's own cell
+        mid = patch[:, (k * k) // 2, 1] if k % 2 else None
+        here = mid if mid is not None else self.patch_grid[self.flat_cell(s[:, 0], s[:, 1]), 1]
+        out[:, sl["patch_speed"]] = patch[:, :, 0]
+        np.clip(
+            patch[:, :, 1] - here[:, None],
+            -ELEVATION_CLIP_M,
+            ELEVATION_CLIP_M,
+            out=out[:, sl["patch_elevation"]],
+        )
+        links = out[:, sl["links"]]
+        hops = pick(world.source_hops)
+        links[:, 0] = pick(world.link_degree)
+        links[:, 1] = hops >= 0
+        links[:, 2] = hops
+        links[:, 3] = pick(world.isolated_s)
+        task = out[:, sl["task"]]
+        task[np.arange(m), pick(world.role)] = 1.0
+        nr = len(ROLES)
+        command = pick(world.command)
+        goal_all = world.route_goal()
+        progress_all = world.routes.progress()
+        if not every:
+            rows = (np.asarray(runs)[:, None] * n + np.arange(n)).ravel()
+            goal_all, progress_all = goal_all[rows], progress_all[rows]
+        goal = np.where(((command == FOLLOW) | (command == RETURN))[:, None], goal_all, pick(world.target_m))
+        gb = to_body(goal - s[:, :2], heading)
+        task[:, nr : nr + 2] = gb
+        task[:, nr + 2] = np.hypot(gb[:, 0], gb[:, 1])
+        task[:, nr + 3] = progress_all
+        task[:, nr + 4] = pick(world.marking) >= 0
+        clearance = self.setup.clearance
+        for j, b in enumerate(runs):
+            run = world.runs[b]
+            rows_b = slice(j * n, (j + 1) * n)
+            self._observe_neighbours(run, self._neighbours_of(b), out[rows_b, sl["neighbours"]])
+            unmarked = run.object_marker < 0
+            if unmarked.any():
+                objs = run.objects_m[unmarked]
+                xy = s[rows_b, :2]
+                near = _nearest(objs, xy)
+                task[rows_b, nr + 5 : nr + 7] = to_body(objs[near] - xy, heading[rows_b])
+            t = run.t_s
+            task[rows_b, nr + 7] = min(1.0, t / self.setup.time_limit_s)
+            if clearance is not None and not run.cleared:
+                task[rows_b, nr + 8] = max(0.0, clearance.at_s - t)
+        return out.reshape(r, n, lay.size)
+
+    # neighbours ---------------------------------------------------------------------------------------
+    def _table(self, run, nb: _Neighbours) -> np.ndarray:
+        """(n, k) ids of each robot's k nearest live robots (-1: none), as of the last radio
+        update or change in who is on the map: the neighbour table its radio keeps."""
+        on = run.alive & run.on_map
+        signature = (run.links_version, int(np.count_nonzero(on)))
+        if nb.signature != signature:
+            nb.signature = signature
+            live = np.flatnonzero(on)
+            k = self.layout.neighbours
+            table = np.full((self.n, k), -1, dtype=np.intp)
+            q = min(k + 1, len(live))
+            if k and q >= 2:
+                xy = run.robot_state[live, :2]
+                _, idx = cKDTree(xy, balanced_tree=False, compact_nodes=False).query(xy, k=q)
+                table[live, : q - 1] = live[idx[:, 1:]]  # the first is itself
+            nb.table = table
+            # which of those links work: fixed until the next radio update, which refreshes the table
+            keys = self._link_keys(run, nb)
+            query = np.repeat(np.arange(self.n), k).astype(np.int64) * run.links.adjacency.shape[0]
+            query += np.maximum(table, 0).ravel()
+            at = np.minimum(np.searchsorted(keys, query), max(len(keys) - 1, 0))
+            hit = keys[at] == query if len(keys) else np.zeros(len(query), bool)
+            nb.linked = hit.reshape(self.n, k) & (table >= 0)
+        return nb.table
+
+    def _observe_neighbours(self, run, nb: _Neighbours, block: np.ndarray) -> None:
+        """Each robot's table neighbours at their current positions: present, body-frame offset,
+        distance, radio link working."""
+        k = self.layout.neighbours
+        if k == 0:
+            return
+        table = self._table(run, nb)
+        here = run.alive & run.on_map
+        me = np.flatnonzero((table >= 0).any(axis=1) & here)
+        if not len(me):
+            return
+        other = table[me]
+        present = (other >= 0) & here[np.maximum(other, 0)]
+        state = run.robot_state
+        xy = state[me, :2]
+        rel = to_body(state[np.maximum(other, 0), :2] - xy[:, None, :], state[me, 2])
+        dist = np.hypot(rel[..., 0], rel[..., 1])
+        linked = nb.linked[me]
+        view = np.zeros((len(me), k, 5), np.float32)
+        view[..., 0] = present
+        view[..., 1:3] = rel
+        view[..., 3] = dist
+        view[..., 4] = linked
+        view[~present] = 0.0
+        block[me] = view.reshape(len(me), 5 * k)
+
+    @staticmethod
+    def _link_keys(run, nb: _Neighbours) -> np.ndarray:
+        """Working links as sorted keys row * N + col (both directions), once per radio update."""
+        if nb.keys_version != run.links_version:
+            adj = run.links.adjacency.tocsr()
+            adj.sort_indices()
+            rows = np.repeat(np.arange(adj.shape[0], dtype=np.int64), np.diff(adj.indptr))
+            nb.keys = rows * adj.shape[0] + adj.indices
+            nb.keys_version = run.links_version
+        return nb.keys
+
+
+def _nearest(points: np.ndarray, queries: np.ndarray) -> np.ndarray:
+    """Index of the nearest of `points` to each query: dense for small sets, a k-d tree beyond."""
+    if len(points) * len(queries) <= DENSE_NEAREST_PAIRS:
+        d2 = (queries[:, None, 0] - points[None, :, 0]) ** 2 + (queries[:, None, 1] - points[None, :, 1]) ** 2
+        return np.argmin(d2, axis=1)
+    return cKDTree(points).query(queries)[1]

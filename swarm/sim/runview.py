@@ -1,0 +1,253 @@
+"""`RunView`: one run of a batch (`swarm.sim.world.World`), the interface the scripted policy, the
+PettingZoo adapter and the log read and command a run through.
+
+Its per-robot arrays (`robot_state`, `alive`, `on_map`, `phase`, `role`, `command`, `target_m`,
+`marking`, `energy_wh`, ...) are views of the batch's (B, n, ...) arrays: write them in place,
+never rebind them. Its own objects (mine field, sensor, radio net and links, score, events,
+objects to mark, random streams, router) belong to the run alone. The event-driven mechanics of a
+run (commands that plan a route, marks, losses) are its methods; the per-step physics and rules
+run batch-wide in `World.advance`.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from swarm.errors import SwarmError
+from swarm.sim import hazards
+from swarm.sim.layout import PHASES, ROLES
+
+if TYPE_CHECKING:
+    from swarm.sim.world import World
+
+COMMANDS = ("follow", "goto", "loiter", "mark", "relay", "return")
+FOLLOW, GOTO, LOITER, MARK, RELAY, RETURN = range(len(COMMANDS))
+WAITING, SEA, SURF, BEACH, RETURNING, DONE = range(len(PHASES))
+#: Robots keep this far from a mine that has been found and is not yet marked (m): four times the
+#: trigger radius (`swarm.sim.mines.DEFAULT_TRIGGER_RADIUS_M`), room for the track-following error.
+AVOID_MINE_M = 1.0
+
+#: The per-robot arrays a run shares with its batch (views of `World`'s arrays of the same name).
+ROBOT_ARRAYS = (
+    "robot_state",
+    "alive",
+    "on_map",
+    "phase",
+    "energy_wh",
+    "inverted",
+    "radio_ok",
+    "sea_time_s",
+    "surf_time_s",
+    "isolated_s",
+    "slip",
+    "submersion",
+    "terrain_now",
+    "distance_m",
+    "lost_at",
+    "command",
+    "target_m",
+    "marking",
+    "role",
+)
+
+
+class RunView:
+    """Run `b` of a `World` (module docstring)."""
+
+    def __init__(self, world: World, b: int) -> None:
+        self.world = world
+        self.b = b
+        setup = world.setup
+        self.setup = setup
+        self.n = setup.n
+        self.offset = b * setup.n
+        for name in ROBOT_ARRAYS:
+            setattr(self, name, getattr(world, name)[b])
+        self.routes = world.routes.view(self.offset, self.n)
+        self.possible_agents = world.possible_agents
+        self.agent_index = world.agent_index
+        self.router = setup.router.fork()
+        self.rngs: dict[str, np.random.Generator] = {}
+        self.seed: int | None = None
+        self.events: list[dict] = []
+        self.end_reason: list[str | None] = [None] * self.n
+
+    # what the whole batch shares --------------------------------------------------------------------
+    @property
+    def mission(self):
+        return self.setup.mission
+
+    @property
+    def plan(self):
+        return self.setup.plan
+
+    @property
+    def beach(self):
+        return self.setup.beach
+
+    @property
+    def limits(self):
+        return self.setup.limits
+
+    @property
+    def clearance(self):
+        return self.setup.clearance
+
+    @property
+    def search_task(self):
+        return self.setup.search_task
+
+    @property
+    def relay_task(self):
+        return self.setup.relay_task
+
+    @property
+    def fixed_m(self):
+        return self.setup.fixed_m
+
+    @property
+    def time_limit_s(self) -> float:
+        return self.setup.time_limit_s
+
+    @property
+    def dry_ground(self) -> np.ndarray:
+        return self.setup.dry_ground
+
+    # the run's clock ----------------------------------------------------------------------------------
+    @property
+    def t_s(self) -> float:
+        return float(self.world.t_s[self.b])
+
+    @t_s.setter
+    def t_s(self, value: float) -> None:
+        self.world.t_s[self.b] = value
+
+    @property
+    def steps(self) -> int:
+        return int(self.world.steps[self.b])
+
+    @steps.setter
+    def steps(self, value: int) -> None:
+        self.world.steps[self.b] = value
+
+    @property
+    def wave_phase_s(self) -> float:
+        return float(self.world.wave_phase_s[self.b])
+
+    @property
+    def in_agents(self) -> np.ndarray:
+        """(n,) bool: robots still in the episode (the adapters' `agents`)."""
+        return self.world.in_agents[self.b]
+
+    @property
+    def running(self) -> bool:
+        """Whether any robot of the run is still in its episode."""
+        return bool(self.world.in_agents[self.b].any())
+
+    # events ------------------------------------------------------------------------------------------
+    def log_event(self, kind: str, robot: int | None = None, **data: Any) -> None:
+        """Append an event at the run's time (with the robot's name and place when given)."""
+        ev: dict[str, Any] = {"t_s": round(self.t_s, 3), "kind": kind}
+        if robot is not None:
+            ev["robot"] = self.possible_agents[robot]
+            ev["x_m"] = round(float(self.robot_state[robot, 0]), 2)
+            ev["y_m"] = round(float(self.robot_state[robot, 1]), 2)
+        ev.update(data)
+        self.events.append(ev)
+
+    def global_phase(self, name: str) -> None:
+        if name not in self.phase_seen:
+            self.phase_seen.add(name)
+            self.log_event("phase", phase=name)
+
+    # commands and routes ---------------------------------------------------------------------------
+    def set_command(self, i: int, command: int, target: np.ndarray | None = None) -> None:
+        """Give robot i a high-level command (`COMMANDS`); used by command mode and the policy."""
+        if not 0 <= command < len(COMMANDS):
+            raise SwarmError(
+                f"sim: command {command}, expected 0..{len(COMMANDS) - 1} ({', '.join(COMMANDS)})"
+            )
+        prev = self.command[i]
+        self.command[i] = command
+        if target is not None:
+            self.target_m[i] = target
+        if command == MARK and target is not None and len(self.objects_m):
+            d = np.hypot(*(self.objects_m - target).T)
+            k = int(np.argmin(d))
+            if prev != MARK or self.marking[i] != k:
+                # around obstacles, not into them: a robot pushing on a log spins until it is stuck
+                self.routes.set(i, self.router.route(self.robot_state[i, :2], self.objects_m[k]))
+            self.marking[i] = k
+            self.target_m[i] = self.objects_m[k]
+        elif command != MARK and self.marking[i] >= 0:
+            self.unmark(i)
+        if command == RETURN and prev != RETURN and self.alive[i]:
+            self.routes.set(
+                i,
+                self.router.route(
+                    self.robot_state[i, :2], self.setup.nearest_pickup(self.robot_state[i, :2])
+                ),
+            )
+            if self.on_map[i] and self.phase[i] >= BEACH:
+                self.phase[i] = RETURNING
+        if command in (LOITER, RELAY):
+            self.target_m[i] = self.robot_state[i, :2]
+
+    def set_route(
+        self, i: int, waypoints: np.ndarray, role: str | None = None, track_from: int | None = None
+    ) -> None:
+        """Replace robot i's route (and role); it follows it under the `follow` command, clear of the
+        objects found and not yet marked."""
+        self.routes.set(i, waypoints, track_from)
+        known = self.objects_m[self.object_marker < 0]
+        if len(known):
+            self.routes.steer_clear(i, self.robot_state[i, :2], known, AVOID_MINE_M)
+        if role is not None:
+            self.role[i] = ROLES.index(role)
+        self.command[i] = FOLLOW
+
+    def route_goal(self) -> np.ndarray:
+        """(n, 2) the last point of each robot's route (its own position without one)."""
+        routes = self.routes
+        end = np.maximum(routes.end - 1, 0)
+        has = routes.end > routes.start
+        goal = self.robot_state[:, :2].copy()
+        if len(routes.points):
+            goal[has] = routes.points[end[has]]
+        return goal
+
+    # marks and losses ----------------------------------------------------------------------------------
+    def unmark(self, i: int) -> None:
+        k = self.marking[i]
+        self.marking[i] = -1
+        if k >= 0 and self.object_marker[k] == i:
+            self.object_marker[k] = -1
+            if self.object_mine[k] >= 0:
+                self.minefield.marked[self.object_mine[k]] = False
+            self.log_event("unmark", int(i), object=int(k))
+
+    def lose(self, i: int, cause: str, **data: Any) -> None:
+        """Take robot i out of the mission now as lost to `cause`, and log it."""
+        self.alive[i] = False
+        self.end_reason[i] = cause
+        self.lost_at[i] = (self.t_s, self.robot_state[i, 0], self.robot_state[i, 1])
+        if self.marking[i] >= 0:
+            self.unmark(i)
+        self.log_event("loss", i, cause=cause, phase=PHASES[self.phase[i]], **data)
+
+    def lose_now(self, i: int, cause: str = "failure") -> None:
+        """A what-if loss (`SwarmEnv.lose`): reported terminated on the next step, like any loss."""
+        if cause not in hazards.CAUSES:
+            raise SwarmError(f"sim: cause {cause!r}, expected one of {list(hazards.CAUSES)}")
+        if not self.alive[i]:
+            raise SwarmError(
+                f"sim: {self.possible_agents[i]} is not in the mission any more ({self.end_reason[i]})"
+            )
+        self.lose(i, cause)
+        self.world.pending_terminated[self.b, i] = True
+
+    def outcome(self) -> dict:
+        """The success criteria now (final after the last step)."""
+        return self.score.outcome()

@@ -1,0 +1,211 @@
+"""The mine sensors of a batch of runs (`swarm.sim.world`), stepped together.
+
+`SensorBatch.step` does for every run what `MineSensor.update` does for one, with the same draws
+from each run's own generator, so a run finds the same mines alone or in a batch:
+
+- a run whose sensor has nothing to do (no pass in progress, no sensing robot in a bin next to a
+  target mine of its run, no long jump, no false alarm to draw for) is skipped: `update` would
+  draw nothing and find nothing; only its robots' last positions move on;
+- Koopman's inverse-cube looks (`MineSensor._looks`) of every run are computed in one pass: the
+  same screen (`_maybe_near`'s bins), the same pairs (the dense distance check, each run with its
+  own radius), the same look integrals, then each run draws its own uniforms, in its own
+  (robot, mine) order; a run with too many pairs for the dense check, and every run of a sensor
+  that draws once per pass, goes through its own `update`;
+- then each run's false alarms, from the same generator, after its looks.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from swarm.planning.detection import inverse_cube_look
+from swarm.sim.sensing import _NEIGHBOUR_BINS, DENSE_PAIRS, SCREEN_MARGIN_M, Detection, MineSensor
+
+_BIN_OFFSET = 1 << 21
+_RUN_STRIDE = 1 << 44
+
+
+class SensorBatch:
+    """The sensors of B runs of n robots (None: a run without a search); `dirty(b)` after run b's
+    targets change (a find, a blast, the clearance)."""
+
+    def __init__(self, sensors: list[MineSensor | None], n: int) -> None:
+        self.sensors = sensors
+        self.n = n
+        self.runs = len(sensors)
+        live = [s for s in sensors if s is not None]
+        self.size = (live[0].range_m + SCREEN_MARGIN_M) if live else 1.0
+        self.false_alarms = bool(live) and live[0].false_alarms_per_m > 0
+        self._dirty = np.ones(self.runs, bool)
+        self._keys = np.empty(0, np.int64)
+        self._per_run: list[np.ndarray] = [np.empty(0, np.int64)] * self.runs
+
+    def dirty(self, b: int) -> None:
+        self._dirty[b] = True
+
+    def _bins(self, xy: np.ndarray) -> np.ndarray:
+        """Screen bins (`_maybe_near`'s): exact for any point within 2^21 bins (10,000 km) of
+        the origin, which every robot on a map is."""
+        return np.floor(xy / self.size).astype(np.int64)
+
+    @staticmethod
+    def _bin_keys(bins: np.ndarray, run: np.ndarray | int) -> np.ndarray:
+        bins = bins + _BIN_OFFSET
+        return np.asarray(run, np.int64) * _RUN_STRIDE + (bins[:, 0] << 22) + bins[:, 1]
+
+    def _refresh(self) -> None:
+        """Each dirty run's screen keys: the bins around its target mines (`_maybe_near`'s)."""
+        for b in np.flatnonzero(self._dirty).tolist():
+            s = self.sensors[b]
+            keys = np.empty(0, np.int64)
+            if s is not None and s._m:
+                field = s.minefield
+                target = field.active & ~field.detected
+                if target.any():
+                    bins = np.floor(field.positions_m[target] / self.size).astype(np.int64)
+                    around = (bins[:, None, :] + _NEIGHBOUR_BINS[None, :, :]).reshape(-1, 2)
+                    keys = self._bin_keys(around, b)
+            self._per_run[b] = keys
+        self._dirty[:] = False
+        self._keys = np.unique(np.concatenate(self._per_run))
+
+    def step(
+        self,
+        xy: np.ndarray,
+        last_xy: np.ndarray,
+        sensing: np.ndarray,
+        alive: np.ndarray,
+        distance_m: np.ndarray,
+        runs: list[int],
+        t_s: np.ndarray,
+        rngs: list[np.random.Generator | None],
+    ) -> dict[int, list[Detection]]:
+        """One step of the sensors of runs `runs`: arrays (B * n, ...) over every robot of the batch,
+        run-major (`sensing` already without non-finite positions; `last_xy` each sensor's last
+        positions, which this moves on); `t_s` (B,) each run's time, `rngs[b]` its sensing
+        stream. Returns each run's reports (mines found, then false alarms), as `update`."""
+        n = self.n
+        out: dict[int, list[Detection]] = {}
+        if self.runs == 1:  # one run: its sensor's own update, nothing to share
+            s = self.sensors[0]
+            if s is not None and runs:
+                out[0] = s.update(xy, sensing, distance_m, float(t_s[0]), rngs[0], alive=alive)
+            return out
+        if self._dirty.any():
+            self._refresh()
+        who = np.flatnonzero(sensing)
+        run = who // n if self.runs > 1 else np.zeros(len(who), np.intp)
+        in_bins = np.zeros(len(who), bool)
+        if len(who) and len(self._keys):
+            keys = self._bin_keys(self._bins(xy[who]), run)
+            at = np.minimum(np.searchsorted(self._keys, keys), len(self._keys) - 1)
+            in_bins = self._keys[at] == keys
+        # a robot that jumped further than the screen's margin is looked at by its run's update
+        seg = xy[who] - last_xy[who]
+        with np.errstate(invalid="ignore"):
+            jumped = (seg[:, 0] * seg[:, 0] + seg[:, 1] * seg[:, 1]) > SCREEN_MARGIN_M**2
+        near_run = np.zeros(self.runs, bool)
+        near_run[run[in_bins]] = True
+        jump_run = np.zeros(self.runs, bool)
+        jump_run[run[jumped]] = True
+        alarm_run = np.zeros(self.runs, bool)
+        if self.false_alarms:
+            alarm_run = (sensing & (distance_m > 0)).reshape(self.runs, n).any(axis=1)
+        looks: list[int] = []
+        for b in runs:
+            s = self.sensors[b]
+            if s is None:
+                continue
+            if not s.continuous or jump_run[b] or len(s._keys):
+                if near_run[b] or jump_run[b] or alarm_run[b] or len(s._keys):
+                    rows = slice(b * n, (b + 1) * n)
+                    out[b] = s.update(xy[rows], sensing[rows], distance_m[rows], float(t_s[b]), rngs[b],
+                                      alive=alive[rows])  # fmt: skip
+                continue
+            if near_run[b] and s._m:
+                looks.append(b)
+            elif alarm_run[b]:
+                out[b] = []
+        if len(looks) == 1:  # one run looks: its own `_looks`, the same draws
+            b = looks[0]
+            rows = slice(b * n, (b + 1) * n)
+            out[b] = self.sensors[b]._looks(xy[rows], sensing[rows], float(t_s[b]), rngs[b])
+        elif looks:
+            wanted = np.zeros(self.runs, bool)
+            wanted[looks] = True
+            self._looks(xy, last_xy, sensing, who[wanted[run] & in_bins], t_s, rngs, out)
+        for b in runs:  # false alarms after the looks, from the same stream
+            s = self.sensors[b]
+            if s is not None and s.continuous and b in out and not (jump_run[b] or len(s._keys)):
+                rows = slice(b * n, (b + 1) * n)
+                out[b] = out[b] + s._false_alarms(
+                    xy[rows], sensing[rows], distance_m[rows], float(t_s[b]), rngs[b]
+                )
+        # the last positions of every run stepped (the updates above set their own the same way)
+        if len(runs) == self.runs:
+            last_xy[~sensing] = np.nan
+            last_xy[who] = xy[who]
+            return out
+        stepped = np.zeros(self.runs, bool)
+        stepped[runs] = True
+        rows = np.repeat(stepped, n)
+        last_xy[rows & ~sensing] = np.nan
+        keep = rows & sensing
+        last_xy[keep] = xy[keep]
+        return out
+
+    def _looks(self, xy, last_xy, sensing, robots, t_s, rngs, out) -> None:
+        """`MineSensor._looks` for the screened `robots` (global rows, run-major) of `runs`."""
+        n = self.n
+        run = robots // n
+        end = xy[robots]
+        start = last_xy[robots]
+        start = np.where(np.isfinite(start), start, end)
+        mid = 0.5 * (start + end)
+        half = 0.5 * np.sqrt(np.sum((end - start) ** 2, axis=1))
+        # each run's radius: the range plus its own robots' largest half step
+        cuts = np.flatnonzero(np.diff(run)) + 1
+        firsts = np.concatenate([[0], cuts])
+        run_ids = run[firsts].tolist()
+        counts = np.diff(np.concatenate([firsts, [len(run)]])).tolist()
+        halves = np.maximum.reduceat(half, firsts).tolist()
+        sensors = [self.sensors[b] for b in run_ids]
+        width = max(len(s.minefield) for s in sensors)
+        mines = np.full((len(run_ids), width, 2), np.nan)
+        target = np.zeros((len(run_ids), width), bool)
+        radius2 = np.empty(len(run_ids))
+        dense = np.ones(len(run_ids), bool)
+        for k, s in enumerate(sensors):
+            field = s.minefield
+            m = len(field)
+            mines[k, :m] = field.positions_m
+            target[k, :m] = field.active & ~field.detected
+            r = s.range_m + float(halves[k])
+            radius2[k] = r * r
+            dense[k] = counts[k] * m <= DENSE_PAIRS
+        slot = np.repeat(np.arange(len(run_ids)), counts)
+        pos = mines[slot]  # (robots, width, 2)
+        d2 = (mid[:, None, 0] - pos[:, :, 0]) ** 2 + (mid[:, None, 1] - pos[:, :, 1]) ** 2
+        near = (d2 <= radius2[slot][:, None]) & target[slot] & dense[slot][:, None]
+        r, j = np.nonzero(near)  # robot then mine within each run: the order each run draws in
+        hazard = np.empty(0)
+        if len(r):
+            look = inverse_cube_look(start[r], end[r], pos[r, j])
+            hazard = sensors[0].sensor.width_m ** 2 / (8.0 * math.pi) * look
+        pair_slot = slot[r]
+        at = np.searchsorted(pair_slot, np.arange(len(run_ids) + 1))
+        for k, b in enumerate(run_ids):
+            s = self.sensors[b]
+            if not dense[k]:  # too many pairs for the dense check: the run's own (k-d tree) way
+                rows = slice(b * n, (b + 1) * n)
+                out[b] = s._looks(xy[rows], sensing[rows], float(t_s[b]), rngs[b])
+                continue
+            lo, hi = at[k], at[k + 1]
+            if hi == lo:
+                out[b] = []
+                continue
+            hit = rngs[b].random(hi - lo) < -np.expm1(-hazard[lo:hi])
+            local = robots[r[lo:hi][hit]] - b * n
+            out[b] = s._found(local, j[lo:hi][hit], float(t_s[b]))

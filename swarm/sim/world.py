@@ -1,0 +1,705 @@
+"""`World`: B independent runs of one mission, advanced together on (B, n, ...) arrays.
+
+```python
+world = World(MissionSetup(mission, plan, dt_s=0.5, substep_s=0.25), runs=8, config=SimConfig())
+world.reset(seeds=[1, 2, 3, 4, 5, 6, 7, 8])
+while world.in_agents.any():
+    wheels, jet = world.controller_commands()      # or from actions, (B, n, 2) and (B, n)
+    ended, time_up, score_change = world.advance(wheels, jet)
+    world.finish(ended, time_up)
+```
+
+Every per-robot quantity is one array over the batch, (B, n, ...), run-major: pose and velocities,
+liveness, phase, battery, role, command and target, timers. One `advance` moves every run that is
+still going by one step of `dt_s`: release and sea transit, physics (`swarm.sim.physics`, all
+robots of all runs in one vectorized call, each run with its own waves), energy, breakers turning
+robots over, route following, phases, sensing (`swarm.sim.sensing`), marks, radio
+(`swarm.sim.comms`), hazards (`swarm.sim.hazards`, one vectorized pass with each run's own draws),
+the synchronized clearance, recovery and the success criteria (`swarm.sim.criteria`).
+
+What is event-driven stays per run (`swarm.sim.runview.RunView`, one per run, whose arrays are
+views of the batch's): the mine field, the sensor's passes, the radio graph, the score, the events
+logged, the objects to mark, the random streams. Each run has its own seed and streams
+(`reset`), drawn exactly as a lone run draws them, so a run's result is the same whether it runs
+alone or in a batch of any size, bit for bit: every batch-wide operation is elementwise over robots
+or reduces over one robot's row, never across runs.
+
+The core knows nothing of agents as names, dicts or gymnasium: the adapters (`swarm.sim.env`,
+`swarm.sim.vector`, `swarm.sim.run`) build those on top, and the scripted policy
+(`swarm.sim.policy`) reads and commands each run through its `RunView`.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from swarm.errors import SwarmError
+from swarm.sim import comms, hazards, sensing
+from swarm.sim.control import drive_toward
+from swarm.sim.criteria import MissionScore
+from swarm.sim.mines import lay_mines
+from swarm.sim.routes import Routes
+from swarm.sim.runview import (
+    BEACH,
+    DONE,
+    FOLLOW,
+    LOITER,
+    MARK,
+    RELAY,
+    RETURN,
+    RETURNING,
+    SEA,
+    SURF,
+    WAITING,
+    RunView,
+)
+from swarm.sim.sensor_batch import SensorBatch
+from swarm.sim.setup import MissionSetup
+
+#: A marking robot marks the object it loiters by within this distance (m).
+MARK_RADIUS_M = 1.0
+#: Robots keep this far from a mine that has been found and is not yet marked (m).
+AVOID_MINE_M = 1.0
+#: Above this submersion a returning robot is afloat beyond the surf and picked up.
+PICKUP_SUBMERSION = 0.99
+#: The wheels find traction (terrain mode on) below this submersion.
+GROUND_SUBMERSION = 0.3
+#: A robot at the end of its route drives back to it once it has drifted this far (m): robots
+#: creep down the beach's slope and are pushed by the swash, and a station (beacon, observation
+#: point) counts only within `swarm.sim.criteria.STATION_RADIUS_M` (3 m).
+STATION_KEEP_M = 1.0
+#: Seconds between trajectory samples kept for rendering tracks.
+TRACK_SAMPLE_S = 5.0
+#: The streams a run's seed is spawned into, in this order (`reset`).
+STREAMS = ("mines", "waves", "sensing", "radio", "hazards", "policy", "rocks")
+
+
+class World:
+    """B runs of one mission on (B, n, ...) arrays (module docstring)."""
+
+    def __init__(
+        self,
+        setup: MissionSetup,
+        runs: int,
+        *,
+        comms_period_s: float = 5.0,
+        max_cycles: int | None = None,
+        sample_tracks: bool = False,
+    ) -> None:
+        if runs < 1:
+            raise SwarmError(f"sim: a world needs at least one run, found {runs}")
+        b, n = int(runs), setup.n
+        self.setup = setup
+        self.B, self.n = b, n
+        self.dt_s = setup.dt_s
+        self.comms_period_s = float(comms_period_s)
+        steps = setup.steps_to_limit
+        self.max_steps = steps if max_cycles is None else min(steps, int(max_cycles))
+        self.sample_tracks = sample_tracks
+        #: Whether `advance` computes the score change every step (the adapters' reward; a study
+        #: needs only the final outcome).
+        self.score_every_step = True
+        self.possible_agents = [f"robot_{i}" for i in range(n)]
+        self.agent_index = {a: i for i, a in enumerate(self.possible_agents)}
+        self.run_of = np.repeat(np.arange(b, dtype=np.intp), n)
+
+        self.robot_state = np.zeros((b, n, 6))
+        self.alive = np.zeros((b, n), bool)  # in the mission: not lost, recovered or expended
+        self.on_map = np.zeros((b, n), bool)
+        self.phase = np.full((b, n), WAITING, dtype=np.int64)
+        self.energy_wh = np.zeros((b, n))
+        self.inverted = np.zeros((b, n), bool)
+        self.radio_ok = np.ones((b, n), bool)
+        self.sea_time_s = np.zeros((b, n))
+        self.surf_time_s = np.zeros((b, n))
+        self.isolated_s = np.zeros((b, n))
+        self.slip = np.zeros((b, n))
+        self.submersion = np.zeros((b, n))
+        self.terrain_now = np.zeros((b, n), dtype=np.intp)
+        self.distance_m = np.zeros((b, n))
+        self.lost_at = np.full((b, n, 3), np.nan)  # t, x, y
+        self.command = np.full((b, n), FOLLOW, dtype=np.int64)
+        self.target_m = np.zeros((b, n, 2))
+        self.marking = np.full((b, n), -1, dtype=np.int64)  # object index a robot marks
+        self.role = np.tile(setup.plan_role, (b, 1))
+        self.link_degree = np.zeros((b, n), dtype=np.intp)
+        self.source_hops = np.full((b, n), -1, dtype=np.intp)
+        self.pending_terminated = np.zeros((b, n), bool)
+        self.in_agents = np.zeros((b, n), bool)  # robots still in their episode
+        self.t_s = np.zeros(b)
+        self.steps = np.zeros(b, dtype=np.int64)
+        self.wave_phase_s = np.zeros(b)
+        self.routes = Routes(b * n)
+        self._sense_xy = np.full((b * n, 2), np.nan)  # each sensor's last positions (views)
+        self._flat: dict[str, np.ndarray] = {}
+        self.runs = [RunView(self, k) for k in range(b)]
+        self.hazard_model: hazards.HazardModel | None = None
+        self.sensors: SensorBatch | None = None
+
+    def flat(self, name: str) -> np.ndarray:
+        """A per-robot array as (B * n, ...), a view (the arrays are never rebound, so the views
+        are made once)."""
+        view = self._flat.get(name)
+        if view is None:
+            a = getattr(self, name)
+            view = self._flat[name] = a.reshape(self.B * self.n, *a.shape[2:])
+        return view
+
+    # reset ------------------------------------------------------------------------------------------
+    def reset(self, seeds: Sequence[int | None], runs: Sequence[int] | None = None) -> None:
+        """Start runs `runs` (all by default) anew, run `runs[k]` with seed `seeds[k]`. A None seed
+        carries on the run's seeded stream (Gymnasium's rule), or draws fresh entropy the first time."""
+        runs = list(range(self.B)) if runs is None else [int(b) for b in runs]
+        if len(seeds) != len(runs):
+            raise SwarmError(f"sim: {len(seeds)} seeds for {len(runs)} runs")
+        for b, seed in zip(runs, seeds, strict=True):
+            self._reset_run(b, seed)
+        fields = [self.runs[b].minefield for b in runs]
+        rocks = [self.runs[b].hidden_rocks_m for b in runs]
+        if self.hazard_model is None:
+            if runs != list(range(self.B)):
+                raise SwarmError("sim: the first reset of a world starts every run")
+            s, m = self.setup, self.setup.mission
+            self.hazard_model = hazards.HazardModel(
+                m.hazards, m.phases, s.beach.terrain_classes, s.library, fields, rocks, self.n
+            )
+            self.sensors = SensorBatch([r.sensor for r in self.runs], self.n)
+        else:
+            self.hazard_model.reset_runs(runs, fields, rocks)
+            assert self.sensors is not None
+            for b in runs:
+                self.sensors.sensors[b] = self.runs[b].sensor
+                self.sensors.dirty(b)
+        for b in runs:
+            run = self.runs[b]
+            run.log_event("mission_start", seed=run.seed, robots=self.n, mines=len(run.minefield))
+        self._release(np.isin(np.arange(self.B), runs))
+
+    def _reset_run(self, b: int, seed: int | None) -> None:
+        s, m, run, n = self.setup, self.setup.mission, self.runs[b], self.n
+        prev = getattr(run, "seed_seq", None)
+        # an unseeded reset after a seeded one carries on the seeded stream
+        ss = np.random.SeedSequence(seed) if seed is not None or prev is None else prev.spawn(1)[0]
+        run.seed_seq = ss
+        run.rngs = dict(zip(STREAMS, (np.random.default_rng(c) for c in ss.spawn(len(STREAMS))), strict=True))
+        run.seed = seed
+        run.router.calls = 0  # replanning seeds count from the episode's start
+        self.t_s[b] = 0.0
+        self.steps[b] = 0
+        self.wave_phase_s[b] = float(run.rngs["waves"].uniform(0.0, s.sea.wave_period_s))
+        run.minefield = lay_mines(m, run.rngs["mines"], s.plan.costmap)
+        run.hidden_rocks_m = hazards.hidden_rocks_in_cells(
+            m.hazards, s.dry_cells, s.beach.cell_m, run.rngs["rocks"]
+        )
+        run.sensor = (
+            sensing.MineSensor(s.search_task.sensor, run.minefield, n, s.clutter)
+            if s.search_task is not None
+            else None
+        )
+        last = self._sense_xy[b * n : (b + 1) * n]
+        last[:] = np.nan
+        if run.sensor is not None:
+            run.sensor._last_xy = last
+        run.radio_net = comms.RadioNet(
+            s.radio,
+            n,
+            s.fixed_m,
+            fixed_height_m=s.fixed_height_m,
+            decorrelation_m=m.hazards.comms.decorrelation_m,
+        )
+        state = self.robot_state[b]
+        state[:] = 0.0
+        state[:, :2] = s.launch_m
+        d = s.entry_m - s.launch_m
+        state[:, 2] = np.arctan2(d[:, 1], d[:, 0])
+        self.alive[b] = True
+        self.on_map[b] = False
+        self.phase[b] = WAITING
+        self.energy_wh[b] = s.capacity_wh
+        self.inverted[b] = False
+        self.radio_ok[b] = True
+        for name in ("sea_time_s", "surf_time_s", "isolated_s", "slip", "submersion", "distance_m"):
+            getattr(self, name)[b] = 0.0
+        self.terrain_now[b] = 0
+        self.lost_at[b] = np.nan
+        self.command[b] = FOLLOW
+        self.target_m[b] = state[:, :2]
+        self.marking[b] = -1
+        self.role[b] = s.plan_role
+        self.pending_terminated[b] = False
+        self.in_agents[b] = True
+        run.end_reason = [None] * n
+        for i, (wp, track_from) in enumerate(s.initial_routes):
+            run.routes.set(i, wp, track_from)
+        if self.routes._used > 8 * max(1, int((self.routes.end - self.routes.start).sum())):
+            self.routes.compact()
+        run.objects_m = np.empty((0, 2))
+        run.object_mine = np.empty(0, dtype=np.int64)
+        run.object_marker = np.empty(0, dtype=np.int64)
+        run.links = run.radio_net.update(state[:, :2], np.zeros(n, bool), run.rngs["radio"])
+        self.link_degree[b] = run.links.degree
+        self.source_hops[b] = run.links.source_hops
+        run.next_comms_s = 0.0
+        run.links_version = 0
+        run.relay_up = None
+        run.relay_was_up = False
+        redundancy = s.relay_task.redundancy if s.relay_task is not None else None
+        run.score = MissionScore(m, redundancy, len(run.minefield))
+        run.score_prev = 0.0
+        run.cleared = False
+        run.events = []
+        run.phase_seen = set()
+        run.tracks = []
+        run.next_track_s = 0.0
+
+    # commands ---------------------------------------------------------------------------------------
+    def route_goal(self) -> np.ndarray:
+        """(B * n, 2) the last point of each robot's route (its own position without one)."""
+        routes = self.routes
+        end = np.maximum(routes.end - 1, 0)
+        has = routes.end > routes.start
+        goal = self.flat("robot_state")[:, :2].copy()
+        if len(routes.points):
+            goal[has] = routes.points[end[has]]
+        return goal
+
+    def controller_commands(self) -> tuple[np.ndarray, np.ndarray]:
+        """Wheel (B, n, 2) and jet (B, n) commands for every robot from its command, route and
+        target: the built-in controller (`swarm.sim.control`) of command mode and the policy."""
+        s = self.setup
+        state = self.flat("robot_state")
+        xy = state[:, :2]
+        command = self.flat("command")
+        done = self.routes.done()
+        # a robot at the end of its route keeps station there: back when it has drifted off
+        route_targets = np.where(done[:, None], self.route_goal(), self.routes.targets(xy))
+        off_station = np.hypot(*(route_targets - xy).T) > STATION_KEEP_M
+        follow = (command == FOLLOW) | (command == RETURN)
+        # a marker follows its route to the mine, then closes in on the mine itself
+        routed = follow | ((command == MARK) & ~done)
+        target = np.where(routed[:, None], route_targets, self.flat("target_m"))
+        hold = (command == LOITER) | (command == RELAY)
+        moving = self.flat("alive") & self.flat("on_map") & ~hold & ~(follow & done & ~off_station)
+        wheels, jet, _ = drive_toward(
+            state,
+            target,
+            s.limits.cruise_speed_mps,
+            self.flat("submersion"),
+            self.flat("inverted"),
+            s.limits,
+            moving,
+        )
+        return wheels.reshape(self.B, self.n, 2), jet.reshape(self.B, self.n)
+
+    # the step ---------------------------------------------------------------------------------------
+    def advance(self, wheels: np.ndarray, jet: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """One step of every run still going, with wheel (B, n, 2) rad/s and jet (B, n) N commands.
+        Returns (B, n) robots the world took out of the mission this step (lost, expended,
+        recovered), (B,) runs whose time is up, and (B,) the change of each run's score (0 unless
+        `score_every_step`). Call `finish` with the first two to end the step."""
+        going = self.in_agents.any(axis=1)
+        if not going.any():
+            raise SwarmError("sim: step() after the episode ended; call reset()")
+        s, dt, n = self.setup, self.dt_s, self.n
+        live = np.flatnonzero(going).tolist()
+        self.steps[going] += 1
+        self.t_s[going] = self.steps[going] * dt
+        moving = self.alive & self.on_map & going[:, None]
+        state = self.flat("robot_state")
+        if self.B == 1:  # one run: its time and wave phase as scalars
+            t0, phase, run_of = float(self.t_s[0]) - dt, float(self.wave_phase_s[0]), None
+        else:
+            t0, phase, run_of = self.t_s - dt, self.wave_phase_s, self.run_of
+        res = s.physics.step(
+            state,
+            np.asarray(wheels, np.float64).reshape(-1, 2),
+            np.asarray(jet, np.float64).reshape(-1),
+            self.flat("inverted"),
+            t0,
+            dt,
+            phase,
+            active=moving.ravel(),
+            run=run_of,
+        )
+        state[:] = res.state
+        mv = moving.ravel()
+        self.flat("slip")[:] = np.where(mv, res.slip, 0.0)
+        sub = self.flat("submersion")
+        sub[:] = np.where(mv, res.submersion, sub)
+        ter = self.flat("terrain_now")
+        ter[:] = np.where(mv, res.terrain, ter)
+        self.flat("distance_m")[:] = np.where(mv, res.distance_m, 0.0)
+        at_sea = self.alive & (self.phase == SEA) & ~self.on_map
+        power = np.where(moving, res.power_w.reshape(self.B, n), 0.0) + np.where(at_sea, s.swim_power_w, 0.0)
+        power = power + np.where(self.alive & (self.phase != WAITING), s.hotel_power_w, 0.0)
+        self.energy_wh -= power * dt / 3600.0
+        hits = res.wave_hits.reshape(self.B, n) & moving
+        self._flip(hits, res.wave_height_m.reshape(self.B, n))
+        self.routes.advance(state[:, :2], mv)
+        self._update_phases(res.in_surf.reshape(self.B, n) & moving, live)
+        self._release(going)
+        self._sense(live)
+        self._update_marks()
+        self._update_comms(live)
+        terminated = self._hazards(res, at_sea, going, live) | self.pending_terminated
+        self.pending_terminated[going] = False
+        self._clearance(terminated, live)
+        self._recover(terminated)
+        time_up = going & (self.steps >= self.max_steps)
+        change = self._score(live, time_up)
+        if self.sample_tracks:
+            self._sample_tracks(live)
+        return terminated, time_up, change
+
+    def finish(self, terminated: np.ndarray, time_up: np.ndarray) -> None:
+        """End the step: truncate every live robot of a run whose time is up, take the robots that
+        left out of their episodes, and log the end of every run that has no robot left."""
+        had = self.in_agents.any(axis=1)
+        for b in np.flatnonzero(time_up).tolist():
+            run = self.runs[b]
+            for i in np.flatnonzero(self.alive[b]).tolist():
+                self.alive[b, i] = False
+                run.end_reason[i] = "time_limit"
+            self.in_agents[b] = False
+        self.in_agents &= ~terminated
+        for b in np.flatnonzero(had & ~self.in_agents.any(axis=1)).tolist():
+            run = self.runs[b]
+            run.score.at_end = True
+            run.log_event("mission_end", outcome=run.score.outcome())
+
+    def fast_forward(self, b: int) -> int:
+        """Skip run b ahead while every robot is off the map (waiting on the platform or swimming in
+        offshore), up to one step before the next release or arrival: one stride instead of many
+        identical steps. Only memoryless hazards act at sea (random failure, radio dropout), so a
+        stride of k steps draws losses with exactly the probability k steps would; a loss is
+        logged at the end of the stride. Returns the steps skipped (0 when a robot is on the map
+        or the next event is within two steps). Runners use it (`simulate`); `step` never does."""
+        s, run, dt = self.setup, self.runs[b], self.dt_s
+        alive, phase, on_map = self.alive[b], self.phase[b], self.on_map[b]
+        if not self.in_agents[b].any() or (alive & on_map).any():
+            return 0
+        waiting = alive & (phase == WAITING)
+        swimming = alive & (phase != WAITING) & ~on_map
+        events = [s.release_s[waiting], s.arrive_s[swimming]]
+        if s.clearance is not None and not run.cleared:
+            events.append(np.array([s.clearance.at_s]))
+        upcoming = np.concatenate(events)
+        if not len(upcoming):
+            return 0
+        t = float(self.t_s[b])
+        steps = int(self.steps[b])
+        k = math.floor((float(upcoming.min()) - t) / dt + 1e-9) - 1
+        k = min(k, self.max_steps - steps - 1)
+        if k < 2:
+            return 0
+        stride = k * dt
+        at_sea = swimming & (phase == SEA)
+        self.energy_wh[b] -= np.where(at_sea, s.swim_power_w + s.hotel_power_w, 0.0) * stride / 3600.0
+        self.sea_time_s[b] += np.where(at_sea, stride, 0.0)
+        self.steps[b] = steps + k
+        self.t_s[b] = (steps + k) * dt
+        n = self.n
+        inp = hazards.HazardInputs(
+            t_s=float(self.t_s[b]),
+            dt_s=stride,
+            alive=alive & (phase != WAITING),
+            at_sea=at_sea,
+            xy=self.robot_state[b, :, :2],
+            terrain=self.terrain_now[b],
+            distance_m=np.zeros(n),
+            slip=np.zeros(n),
+            driving=np.zeros(n, bool),
+            wave_hits=np.zeros(n, bool),
+            obstacle_hit=np.full(n, -1),
+            energy_wh=self.energy_wh[b],
+            sea_time_s=self.sea_time_s[b],
+            surf_time_s=self.surf_time_s[b],
+            isolated_s=np.zeros(n),
+            radio_ok=self.radio_ok[b],
+        )
+        self.pending_terminated[b] |= self._apply_hazards(inp, [b])
+        return k
+
+    # mission mechanics ------------------------------------------------------------------------------
+    def _release(self, going: np.ndarray) -> None:
+        """Robots leave the platform, and those that have swum in appear at their launch points."""
+        s = self.setup
+        t = (self.t_s + 1e-9)[:, None]
+        ok = self.alive & going[:, None]
+        leaving = ok & (self.phase == WAITING) & (s.release_s[None, :] <= t)
+        for b, i in zip(*np.nonzero(leaving), strict=True):
+            run = self.runs[b]
+            self.phase[b, i] = BEACH if s.on_beach_launch else SEA
+            run.log_event("release", int(i))
+            run.global_phase("sea_transit" if not s.on_beach_launch else "beach_operations")
+        off = ok & ~self.on_map
+        arriving = off & (self.phase != WAITING) & (s.arrive_s[None, :] <= t)
+        if s.on_beach_launch:
+            arriving |= off & (self.phase == BEACH)
+        for b, i in zip(*np.nonzero(arriving), strict=True):
+            self.on_map[b, i] = True
+            self.runs[b].log_event("arrive", int(i))
+
+    def _update_phases(self, in_surf: np.ndarray, live: list[int]) -> None:
+        s, dt = self.setup, self.dt_s
+        # stranded in the surf: time in the surf zone before first getting ashore
+        self.surf_time_s += np.where(in_surf & (self.phase <= SURF), dt, 0.0)
+        self.sea_time_s += np.where(self.alive & (self.phase == SEA), dt, 0.0)
+        to_surf = self.alive & (self.phase == SEA) & in_surf
+        for b, i in zip(*np.nonzero(to_surf), strict=True):
+            self.phase[b, i] = SURF
+            self.runs[b].log_event("surf", int(i))
+            self.runs[b].global_phase("surf_crossing")
+        ground = (
+            self.alive
+            & self.on_map
+            & (self.submersion < GROUND_SUBMERSION)
+            & ((self.phase == SEA) | (self.phase == SURF))
+        )
+        for b, i in zip(*np.nonzero(ground), strict=True):
+            self.phase[b, i] = BEACH
+            self.runs[b].log_event("ashore", int(i))
+            self.runs[b].global_phase("beach_operations")
+        phases = s.mission.phases
+        if phases.return_to_sea.enabled:
+            for b in live:
+                if self.t_s[b] >= phases.beach_end_s:
+                    self.runs[b].global_phase("return_to_sea")
+
+    def _flip(self, hits: np.ndarray, height_m: np.ndarray) -> None:
+        """Breakers turn robots over: flip_probability for a full breaker, in proportion to the
+        local breaker height below it. With `hazards.enabled` false none does (a rolled robot can
+        overstay the surf crossing); the draws are still made, to keep the stream."""
+        runs = np.flatnonzero(hits.any(axis=1))
+        if not len(runs):
+            return
+        surf = self.setup.mission.hazards.surf
+        enabled = self.setup.mission.hazards.enabled
+        for b in runs.tolist():
+            run = self.runs[b]
+            p = surf.flip_probability * np.minimum(1.0, height_m[b] / max(surf.wave_height_m, 1e-9))
+            draws = run.rngs["waves"].random(self.n)
+            flips = hits[b] & (draws < p) & enabled
+            self.inverted[b] ^= flips
+            for i in np.flatnonzero(flips).tolist():
+                run.log_event("flip", i, inverted=bool(self.inverted[b, i]))
+
+    def _sense(self, live: list[int]) -> None:
+        if self.setup.search_task is None:
+            return
+        assert self.sensors is not None
+        sensing_now = self.alive & self.on_map & (self.phase >= BEACH)
+        xy = self.flat("robot_state")[:, :2]
+        flat_sensing = sensing_now.ravel() & np.isfinite(xy).all(axis=1)
+        rngs = [run.rngs.get("sensing") for run in self.runs]
+        found = self.sensors.step(
+            xy,
+            self._sense_xy,
+            flat_sensing,
+            self.flat("alive"),
+            self.flat("distance_m"),
+            live,
+            self.t_s,
+            rngs,
+        )
+        for b in sorted(found):
+            if found[b]:
+                self.sensors.dirty(b)
+            for det in found[b]:
+                self._report(self.runs[b], det)
+
+    def _report(self, run: RunView, det: sensing.Detection) -> None:
+        b = run.b
+        xy = np.asarray(det.xy, dtype=np.float64)
+        for i in np.flatnonzero(self.alive[b] & self.on_map[b] & (self.marking[b] < 0)).tolist():
+            run.routes.steer_clear(i, self.robot_state[b, i, :2], xy[None], AVOID_MINE_M)
+        run.objects_m = np.vstack([run.objects_m, xy[None]])
+        run.object_mine = np.append(run.object_mine, det.mine)
+        run.object_marker = np.append(run.object_marker, -1)
+        kind = "detection" if det.mine >= 0 else "false_alarm"
+        run.log_event(
+            kind, det.robot, object=len(run.objects_m) - 1, mine=det.mine, at_m=[round(v, 2) for v in det.xy]
+        )
+
+    def _update_marks(self) -> None:
+        marking = self.alive & (self.marking >= 0)
+        for b in np.flatnonzero(marking.any(axis=1)).tolist():
+            run = self.runs[b]
+            who = np.flatnonzero(marking[b])
+            k = self.marking[b, who]
+            d = self.robot_state[b, who, :2] - run.objects_m[k]
+            near = np.hypot(d[:, 0], d[:, 1]) <= MARK_RADIUS_M
+            for i, obj in zip(who[near].tolist(), k[near].tolist(), strict=True):
+                if run.object_marker[obj] < 0:
+                    run.object_marker[obj] = i
+                    if run.object_mine[obj] >= 0:
+                        run.minefield.marked[run.object_mine[obj]] = True
+                    run.log_event("mark", i, object=obj, mine=int(run.object_mine[obj]))
+
+    def _update_comms(self, live: list[int]) -> None:
+        s = self.setup
+        cutoff = s.mission.hazards.comms.cutoff_s
+        for b in live:
+            run = self.runs[b]
+            t = float(self.t_s[b])
+            if t + 1e-9 < run.next_comms_s:
+                continue
+            run.next_comms_s = t + self.comms_period_s
+            jammed = cutoff is not None and t >= cutoff
+            up = self.alive[b] & self.on_map[b] & self.radio_ok[b] & (not jammed)
+            run.links = run.radio_net.update(self.robot_state[b, :, :2], up, run.rngs["radio"])
+            self.link_degree[b] = run.links.degree
+            self.source_hops[b] = run.links.source_hops
+            run.links_version += 1
+            if s.relay_task is not None:
+                now = bool(run.links.fixed_linked(s.relay_task.redundancy))
+                if now != bool(run.relay_up):
+                    if now:
+                        run.log_event("relay_repair" if run.relay_was_up else "relay_connected")
+                    else:
+                        run.log_event("relay_break")
+                run.relay_was_up |= now
+                run.relay_up = now
+
+    def _hazards(self, res, at_sea: np.ndarray, going: np.ndarray, live: list[int]) -> np.ndarray:
+        """Apply this step's losses; returns (B, n) the robots terminated by them."""
+        dt, n = self.dt_s, self.n
+        linked = self.link_degree > 0
+        iso = np.where(linked | ~self.on_map, 0.0, self.isolated_s + dt)
+        every = len(live) == self.B
+        if every:
+            self.isolated_s[...] = iso
+        else:
+            self.isolated_s[going] = iso[going]
+        rows = None if every else np.repeat(going, n)
+        on_map = self.flat("on_map")
+
+        def pick(a: np.ndarray) -> np.ndarray:
+            a = a.reshape(self.B * n, *a.shape[2:]) if a.ndim >= 2 and a.shape[0] == self.B else a
+            return a if every else a[rows]
+
+        inp = hazards.HazardInputs(
+            t_s=float(self.t_s[live[0]]),
+            dt_s=dt,
+            alive=pick(self.alive & (self.phase != WAITING)),
+            at_sea=pick(at_sea),
+            xy=pick(self.flat("robot_state")[:, :2]),
+            terrain=pick(self.flat("terrain_now")),
+            distance_m=pick(self.flat("distance_m")),
+            slip=pick(self.flat("slip")),
+            driving=pick(np.abs(res.slip) > 0),  # the physics reports slip only while the wheels turn
+            wave_hits=pick(res.wave_hits & on_map),
+            wave_height_m=pick(res.wave_height_m),
+            obstacle_hit=pick(np.where(on_map, res.obstacle_hit, -1)),
+            energy_wh=pick(self.flat("energy_wh")),
+            sea_time_s=pick(self.flat("sea_time_s")),
+            surf_time_s=pick(self.flat("surf_time_s")),
+            isolated_s=pick(self.flat("isolated_s")),
+            radio_ok=pick(self.flat("radio_ok")),
+        )
+        lost = np.zeros((self.B, n), bool)
+        lost[going] = self._apply_hazards(inp, live).reshape(len(live), n)
+        return lost
+
+    def _apply_hazards(self, inp: hazards.HazardInputs, runs: list[int]) -> np.ndarray:
+        """Draw this step's (or stride's) losses of runs `runs` and log them; returns who was lost
+        (a row per robot of those runs)."""
+        assert self.hazard_model is not None
+        n = self.n
+        losses = self.hazard_model.step(inp, [self.runs[b].rngs["hazards"] for b in runs], runs)
+        radio_ok = self.radio_ok[runs].reshape(-1) & ~losses.radio_dropped
+        self.radio_ok[runs] = radio_ok.reshape(len(runs), n)
+        alive = self.alive[runs].reshape(-1)
+        lost = losses.lost & alive
+        for k in np.flatnonzero(lost).tolist():
+            b, i = runs[k // n], k % n
+            cause = hazards.CAUSES[losses.cause[k]]
+            extra = {"mine": int(losses.mine[k])} if losses.mine[k] >= 0 else {}
+            if extra and self.sensors is not None:
+                self.sensors.dirty(b)
+            self.runs[b].lose(i, cause, **extra)
+        return lost
+
+    def _clearance(self, terminated: np.ndarray, live: list[int]) -> None:
+        c = self.setup.clearance
+        if c is None:
+            return
+        for b in live:
+            run = self.runs[b]
+            if run.cleared or float(self.t_s[b]) + 1e-9 < c.at_s:
+                continue
+            run.cleared = True
+            if self.sensors is not None:
+                self.sensors.dirty(b)
+            alive, marking = self.alive[b], self.marking[b]
+            markers = [
+                int(i) for i in np.flatnonzero(alive & (marking >= 0)) if run.object_marker[marking[i]] == i
+            ]
+            blasts = []
+            for i in markers:
+                k = marking[i]
+                j = run.object_mine[k]
+                if j >= 0 and run.minefield.active[j]:
+                    run.minefield.cleared[j] = True
+                blasts.append(run.objects_m[k])
+                alive[i] = False
+                run.end_reason[i] = "expended"
+                terminated[b, i] = True
+                run.log_event("expended", i, object=int(k), mine=int(j))
+            run.log_event("clearance", markers=len(markers), mines_cleared=int(run.minefield.cleared.sum()))
+            if blasts:
+                tree = cKDTree(np.array(blasts))
+                for i in np.flatnonzero(alive & self.on_map[b]):
+                    if tree.query(self.robot_state[b, i, :2])[0] <= c.standoff_m:
+                        run.lose(int(i), "blast")
+                        terminated[b, i] = True
+
+    def _recover(self, terminated: np.ndarray) -> None:
+        back = self.alive & (self.phase == RETURNING) & (self.submersion >= PICKUP_SUBMERSION)
+        for b, i in zip(*np.nonzero(back), strict=True):
+            run = self.runs[b]
+            self.alive[b, i] = False
+            run.end_reason[i] = "recovered"
+            self.phase[b, i] = DONE
+            terminated[b, i] = True
+            run.score.recovered += 1
+            run.log_event("recovered", int(i))
+
+    def _score(self, live: list[int], time_up: np.ndarray) -> np.ndarray:
+        ashore = self.alive & self.on_map & (self.phase >= BEACH)
+        any_ashore = ashore.any(axis=1)
+        change = np.zeros(self.B)
+        dt = self.dt_s
+        for b in live:
+            run = self.runs[b]
+            score = run.score
+            t = float(self.t_s[b])
+            score.detected = int(run.minefield.detected.sum())
+            if score.beach_start_s is None and any_ashore[b]:
+                score.beach_start_s = t
+            needs_xy = bool(score.zones or score.surveillance or score.beacons)
+            xy = self.robot_state[b][ashore[b], :2] if needs_xy else _NO_XY
+            score.update(t, dt, xy, run.relay_up)
+            if time_up[b]:
+                score.at_end = True
+            if self.score_every_step:
+                now = score.score()
+                change[b] = now - run.score_prev
+                run.score_prev = now
+        return change
+
+    def _sample_tracks(self, live: list[int]) -> None:
+        for b in live:
+            run = self.runs[b]
+            if float(self.t_s[b]) + 1e-9 < run.next_track_s:
+                continue
+            run.next_track_s = float(self.t_s[b]) + TRACK_SAMPLE_S
+            on = self.alive[b] & self.on_map[b]
+            run.tracks.append(np.where(on[:, None], self.robot_state[b, :, :2], np.nan).astype(np.float32))
+
+
+_NO_XY = np.empty((0, 2))

@@ -1,0 +1,166 @@
+"""The batched world core (`swarm.sim.world`): a run's result is the same whether it runs alone
+(through the PettingZoo adapter, `simulate`) or in a batch of any size (`simulate_batch`), bit for
+bit on its events, outcome, losses and trajectories; runs of one batch keep their own seeds, mine
+fields and hazards; the scripted policy drives each run through its `RunView` only."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from tiny_missions import write_mission
+
+from swarm.mission.load import load_mission
+from swarm.mission.plan import plan_mission
+from swarm.sim.run import MissionLog, simulate, simulate_batch
+from swarm.sim.runview import RunView
+from swarm.sim.setup import MissionSetup
+from swarm.sim.world import World
+
+SHORT_RADIO = {"tx_power_dbm": 0.0, "rx_sensitivity_dbm": -70.0, "fade_margin_db": 3.0}
+#: Everything at once on the small beach: a landing, a search that marks what it finds and clears
+#: it together, a relay chain, losses from failures, breakers and mines, and the return to sea.
+TASKS = [
+    {"type": "landing", "zones": ["landing_a"], "robots_per_zone": 1},
+    {
+        "type": "search",
+        "area": "search_beach",
+        "sensor": {"sweep_width_m": 4.0},
+        "mark": True,
+        "clearance": {"at_s": 700, "standoff_m": 8},
+    },
+    {"type": "relay", "source": "relay_source", "sinks": ["relay_sink"], "radio": SHORT_RADIO},
+]
+HAZARDS = {
+    "attrition": {"mtbf_h": 0.4},
+    "mines": {"count": 5, "trigger_probability": 0.5},
+    "surf": {"wave_height_m": 0.8},
+}
+PHASES = {
+    "sea_transit": {"time_limit_s": 300},
+    "surf_crossing": {"time_limit_s": 300},
+    "beach_operations": {"time_limit_s": 420},
+    "return_to_sea": {"enabled": True, "time_limit_s": 120},
+}
+SEEDS = [3, 8, 21]
+
+
+@pytest.fixture(scope="module")
+def mission_and_plan(tmp_path_factory: pytest.TempPathFactory):
+    path = write_mission(
+        tmp_path_factory.mktemp("world"),
+        "busy",
+        swarm={"count": 10},
+        tasks=TASKS,
+        hazards=HAZARDS,
+        phases=PHASES,
+    )
+    mission = load_mission(path)
+    return mission, plan_mission(mission, seed=mission.seed, workers=1)
+
+
+@pytest.fixture(scope="module")
+def alone(mission_and_plan) -> dict[int, MissionLog]:
+    mission, plan = mission_and_plan
+    return {s: simulate(mission, seed=s, plan=plan) for s in SEEDS}
+
+
+def _same(a: MissionLog, b: MissionLog) -> None:
+    assert a.events == b.events
+    assert a.summary() == b.summary()
+    assert a.mines_state == b.mines_state
+    assert a.end_reasons == b.end_reasons
+    assert a.completed_s == b.completed_s
+    for name in (
+        "times_s",
+        "xy_m",
+        "heading_rad",
+        "alive",
+        "phase",
+        "role",
+        "mines_m",
+        "objects_m",
+        "object_mine",
+    ):
+        x, y = getattr(a, name), getattr(b, name)
+        assert x.dtype == y.dtype and x.shape == y.shape, name
+        assert np.array_equal(x, y, equal_nan=x.dtype.kind == "f"), name
+
+
+def test_the_runs_are_busy_enough_to_tell(alone) -> None:
+    """The runs lose robots to several causes, find and clear mines and differ from each other:
+    an identity below means something."""
+    causes = {x["cause"] for log in alone.values() for x in log.losses}
+    assert len(causes) >= 2, causes
+    kinds = {ev["kind"] for log in alone.values() for ev in log.events}
+    assert {"detection", "mark", "clearance", "relay_connected", "takeover"} <= kinds, kinds
+    assert len({len(log.events) for log in alone.values()}) == len(SEEDS)
+
+
+@pytest.mark.parametrize(
+    "order",
+    [
+        SEEDS,
+        pytest.param([*SEEDS[::-1], SEEDS[1]], marks=pytest.mark.slow),  # reordered, a seed twice
+        pytest.param([SEEDS[2]], marks=pytest.mark.slow),  # a batch of one
+    ],
+)
+def test_a_run_is_the_same_alone_and_in_a_batch_of_any_size(mission_and_plan, alone, order) -> None:
+    mission, plan = mission_and_plan
+    logs = simulate_batch(mission, order, plan=plan)
+    assert [log.seed for log in logs] == order
+    for seed, log in zip(order, logs, strict=True):
+        _same(alone[seed], log)
+
+
+def test_runs_of_a_batch_have_their_own_mines_and_waves(mission_and_plan) -> None:
+    mission, plan = mission_and_plan
+    world = World(MissionSetup(mission, plan, dt_s=0.5, substep_s=0.25), 3)
+    world.reset([5, 6, 5])
+    a, b, c = world.runs
+    assert not np.array_equal(a.minefield.positions_m, b.minefield.positions_m)
+    assert np.array_equal(a.minefield.positions_m, c.minefield.positions_m)
+    assert world.wave_phase_s[0] != world.wave_phase_s[1] and world.wave_phase_s[0] == world.wave_phase_s[2]
+    # a run's arrays are views of the batch's: writing one changes the world, and nothing else
+    a.robot_state[0, 0] += 1.0
+    assert world.robot_state[0, 0, 0] == a.robot_state[0, 0]
+    assert world.robot_state[2, 0, 0] != a.robot_state[0, 0]
+
+
+def test_the_policy_reads_a_run_through_its_view_only() -> None:
+    """No private attribute of the run or the world is read by the policy's source."""
+    import inspect
+    import re
+
+    from swarm.sim import policy
+
+    source = inspect.getsource(policy)
+    assert not re.findall(r"\benv\._[a-z]", source)
+    assert "RunView" in source and isinstance(RunView, type)
+
+
+def test_resetting_some_runs_leaves_the_others_alone(mission_and_plan) -> None:
+    """A run reset in the middle of a batch (autoreset) starts over from its seed exactly; the
+    others go on as if nothing happened."""
+    mission, plan = mission_and_plan
+    setup = MissionSetup(mission, plan, dt_s=0.5, substep_s=0.25)
+
+    def steps(world: World, k: int) -> None:
+        for _ in range(k):
+            wheels, jet = world.controller_commands()
+            ended, up, _ = world.advance(wheels, jet)
+            world.finish(ended, up)
+
+    w = World(setup, 2)
+    w.reset([1, 2])
+    steps(w, 150)
+    w.reset([7], runs=[0])
+    steps(w, 100)
+    lone_a, lone_b = World(setup, 1), World(setup, 1)
+    lone_a.reset([7])
+    steps(lone_a, 100)
+    lone_b.reset([2])
+    steps(lone_b, 250)
+    assert np.array_equal(w.robot_state[0], lone_a.robot_state[0])
+    assert w.runs[0].events == lone_a.runs[0].events
+    assert np.array_equal(w.robot_state[1], lone_b.robot_state[0])
+    assert w.runs[1].events == lone_b.runs[0].events
