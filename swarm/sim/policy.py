@@ -138,6 +138,7 @@ class ScriptedPolicy:
         self._held: dict[int, tuple[np.ndarray, bool]] = {}
         self._waiting: dict[int, np.ndarray] = {}  # stand-by waiting out a clearance -> its point
         self._clearance_state = "before"
+        self._gave_up: set[tuple[int, int]] = set()  # (robot, object): marks given up as too far
         self._returning = False
         self._links_seen = -1
         self._safe_cache: tuple[tuple[bytes, float], SafeGround] | None = None
@@ -320,7 +321,8 @@ class ScriptedPolicy:
             free = idle & ~knows_route
             due = [it for it in marks if self._mark_due(it, free)]
             if due and free.any():
-                self._auction(due, free)
+                c = env.clearance
+                self._auction(due, free, arrive_by_s=None if c is None else c.at_s)
         self._park(self._idle())
         if not late:
             self._stand_by(self._idle())
@@ -442,12 +444,23 @@ class ScriptedPolicy:
         travel = RETREAT_TIME_FACTOR * gap / env.limits.cruise_speed_mps
         return env.t_s + travel + MARK_SLACK_S >= c.at_s - self.lead_s()
 
-    def _auction(self, open_items: list[WorkItem], idle: np.ndarray) -> None:
+    def _auction(
+        self, open_items: list[WorkItem], idle: np.ndarray, arrive_by_s: float | None = None
+    ) -> None:
+        """Assign `open_items` to `idle` robots that know of them, cost the straight-line distance.
+        With `arrive_by_s` (a mark before the clearance), a robot that cannot be there by then (at
+        cruise speed, with the retreat factor's slack and allowance) is not sent: the trip would
+        end with the mark given up deep among the other marked mines as the blast goes off."""
         env = self.env
         xy = env.robot_state[:, :2]
         starts = np.array([it.start_m for it in open_items])
         cost = np.hypot(xy[:, None, 0] - starts[None, :, 0], xy[:, None, 1] - starts[None, :, 1])
         audience = np.array([it.audience for it in open_items]).T  # (n, items)
+        if arrive_by_s is not None:
+            travel_s = RETREAT_TIME_FACTOR * cost / env.limits.cruise_speed_mps + RETREAT_ALLOWANCE_S
+            audience = audience & (env.t_s + travel_s < arrive_by_s)
+            for i, k in self._gave_up:  # its route there was longer than the straight line
+                audience[i, [j for j, it in enumerate(open_items) if it.obj == k]] = False
         cost = np.where(audience, cost, np.inf)
         able = idle & np.isfinite(cost).any(axis=1)
         if not able.any():
@@ -497,9 +510,13 @@ class ScriptedPolicy:
         c = env.clearance
         if c is None or self._clearance_state == "done":
             return
+        if self._clearance_state == "before" and c.at_s - env.t_s <= HOLD_HORIZON_S:
+            self._drop_late_markers(c.at_s - env.t_s)  # the allocation parks them clear
         if self._clearance_state == "before" and self._hold_due():
             self._clearance_state = "holding"
             self._hold(c.at_s - env.t_s, c.standoff_m + STANDOFF_MARGIN_M)
+        elif self._clearance_state == "holding" and not env.cleared:
+            self._recheck_markers(c.at_s - env.t_s, c.standoff_m + STANDOFF_MARGIN_M)
         elif self._clearance_state == "holding" and env.cleared:
             self._clearance_state = "done"
             for i, (rest, in_track) in self._held.items():
@@ -541,24 +558,10 @@ class ScriptedPolicy:
     def _hold(self, time_left_s: float, safe_m: float) -> None:
         """Everyone but the markers stops; those within `safe_m` of a marked mine move clear first.
 
-        A robot on its way to mark a mine keeps going if it can get there in `time_left_s` at
-        cruise speed (with the retreat factor's slack), else it gives the mark up and retreats."""
+        A robot on its way to mark a mine keeps going if it can get there in `time_left_s`
+        (`_arrival_s`), else it gives the mark up and retreats; `_recheck_markers` keeps asking."""
         env = self.env
-        marked = env.object_marker >= 0
-        speed = env.limits.cruise_speed_mps
-        for i in np.flatnonzero(env.alive & env.on_map & (env.marking >= 0)):
-            k = int(env.marking[i])
-            if env.object_marker[k] == i:
-                continue  # on its mine: it goes with it
-            gap = float(np.hypot(*(env.robot_state[i, :2] - env.objects_m[k])))
-            if RETREAT_TIME_FACTOR * gap / speed + RETREAT_ALLOWANCE_S < time_left_s:
-                marked[k] = True  # it will be there: keep clear of that mine too
-                continue
-            for it in self.items:
-                if it.kind == "mark" and it.obj == k and it.taken_by == i:
-                    it.taken_by = -1
-            env.set_command(int(i), LOITER)  # drops the mark
-        objs = env.objects_m[marked]
+        objs = env.objects_m[self._drop_late_markers(time_left_s)]
         for i in np.flatnonzero(env.alive & env.on_map & (env.marking < 0)):
             xy = env.robot_state[i, :2]
             rest = env.routes.remaining(i)
@@ -568,6 +571,57 @@ class ScriptedPolicy:
                 self._retreat(int(i), objs, safe_m)
                 continue
             env.set_command(int(i), LOITER)
+
+    def _arrival_s(self, i: int, k: int) -> float:
+        """The time robot i needs to reach object k: the rest of its route (at least the straight
+        line) at cruise speed, with the retreat factor's slack and allowance."""
+        env = self.env
+        xy = env.robot_state[i, :2]
+        route = np.vstack([xy[None], env.routes.remaining(i)])
+        length = max(
+            float(np.hypot(*np.diff(route, axis=0).T).sum()), float(np.hypot(*(xy - env.objects_m[k])))
+        )
+        return RETREAT_TIME_FACTOR * length / env.limits.cruise_speed_mps + RETREAT_ALLOWANCE_S
+
+    def _drop_late_markers(self, time_left_s: float) -> np.ndarray:
+        """Robots on their way to mark a mine that can no longer get there before the detonation
+        give the mark up (the mine stays unmarked). The objects that will be marked: those with
+        their marker on them, and those a marker is still on its way to."""
+        env = self.env
+        marked = env.object_marker >= 0
+        for i in np.flatnonzero(env.alive & env.on_map & (env.marking >= 0)):
+            k = int(env.marking[i])
+            if env.object_marker[k] == i:
+                continue  # on its mine: it goes with it
+            if self._arrival_s(int(i), k) < time_left_s:
+                marked[k] = True  # it will be there: keep clear of that mine too
+                continue
+            for it in self.items:
+                if it.kind == "mark" and it.obj == k and it.taken_by == i:
+                    it.taken_by = -1
+            self._gave_up.add((int(i), k))
+            env.set_command(int(i), LOITER)  # drops the mark
+        return marked
+
+    def _recheck_markers(self, time_left_s: float, safe_m: float) -> None:
+        """During the hold, a marker that falls behind (detours, soft ground, a roll-over) gives
+        the mark up as soon as it can no longer make it, and gets clear like everyone else (before
+        the hold, `_clearance` drops it and the allocation parks it clear)."""
+        env = self.env
+        late = [
+            int(i)
+            for i in np.flatnonzero(env.alive & env.on_map & (env.marking >= 0))
+            if env.object_marker[env.marking[i]] != i
+            and self._arrival_s(int(i), int(env.marking[i])) >= time_left_s
+        ]
+        if not late:
+            return
+        objs = env.objects_m[self._drop_late_markers(time_left_s)]
+        for i in late:
+            xy = env.robot_state[i, :2]
+            self._held[i] = (xy[None].copy(), False)
+            if len(objs) and float(np.min(np.hypot(*(objs - xy).T))) < safe_m:
+                self._retreat(i, objs, safe_m)
 
     def _retreat(self, i: int, objs: np.ndarray, safe_m: float) -> None:
         """Route robot i over free ground to the nearest point `safe_m` clear of every point of
