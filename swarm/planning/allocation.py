@@ -41,6 +41,7 @@ index). No randomness is drawn.
 
 from __future__ import annotations
 
+import math
 from collections import deque
 from dataclasses import dataclass, field
 
@@ -175,28 +176,33 @@ def _bid_phase(
     queue = deque(np.flatnonzero(person_object < 0).tolist())
     bids = 0
     n = len(prices)
+    # plain Python ints and floats for the per-bid bookkeeping (a bid is a handful of scalar
+    # operations: numpy's per-call overhead on scalars would dominate); the same IEEE arithmetic
+    owner, held = object_person.tolist(), person_object.tolist()
     while queue:
         i = queue.popleft()
         values = benefit[i] - prices
-        j = int(np.argmax(values))
-        best = values[j]
+        j = int(values.argmax())
+        best = float(values[j])
         if n > 1:
             values[j] = -np.inf
             second = float(values.max())
         else:
-            second = -np.inf
-        if not np.isfinite(second):  # one feasible object: any finite raise keeps eps-CS
+            second = -math.inf
+        if not math.isfinite(second):  # one feasible object: any finite raise keeps eps-CS
             second = best - cap
         prices[j] += best - second + eps
-        previous = object_person[j]
-        object_person[j] = i
-        person_object[i] = j
+        previous = owner[j]
+        owner[j] = i
+        held[i] = j
         if previous >= 0:
-            person_object[previous] = -1
-            queue.append(int(previous))
+            held[previous] = -1
+            queue.append(previous)
         bids += 1
         if bids > max_bids:
+            object_person[:], person_object[:] = owner, held
             raise SwarmError(f"auction: no assignment after {max_bids} bids (eps {eps:g} too small?)")
+    object_person[:], person_object[:] = owner, held
     return bids
 
 
