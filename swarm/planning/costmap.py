@@ -203,7 +203,9 @@ class CostMap:
     def cell_of(self, x: np.ndarray | float, y: np.ndarray | float) -> tuple[np.ndarray, np.ndarray]:
         col = np.floor((np.asarray(x, dtype=np.float64) - self.origin_m[0]) / self.cell_m).astype(np.intp)
         row = np.floor((np.asarray(y, dtype=np.float64) - self.origin_m[1]) / self.cell_m).astype(np.intp)
-        return np.clip(row, 0, self.shape[0] - 1), np.clip(col, 0, self.shape[1] - 1)
+        rows, cols = self.blocked.shape
+        # minimum/maximum rather than np.clip: the same cells at a fraction of clip's call overhead
+        return np.minimum(np.maximum(row, 0), rows - 1), np.minimum(np.maximum(col, 0), cols - 1)
 
     def center_of(self, row: np.ndarray | int, col: np.ndarray | int) -> tuple[np.ndarray, np.ndarray]:
         x = self.origin_m[0] + (np.asarray(col) + 0.5) * self.cell_m
