@@ -65,6 +65,18 @@ class Router:
         r, c = (int(v) for v in self.cm.cell_of(x, y))
         return np.array([x, y]) if self.cm.reason[r, c] == NO_TRACTION else self.snap(xy)
 
+    def reachable_many(self, xy: np.ndarray) -> np.ndarray:
+        """`reachable` of each point of `xy` (k, 2), in one pass."""
+        out = np.asarray(xy, dtype=np.float64).reshape(-1, 2).copy()
+        blocked = ~np.asarray(self.cm.is_free(out[:, 0], out[:, 1]), bool)
+        if blocked.any():
+            r, c = self.cm.cell_of(out[blocked, 0], out[blocked, 1])
+            land = self.cm.reason[r, c] != NO_TRACTION  # open water stays: the robot swims there
+            x, y = self.cm.center_of(self._near_r[r[land], c[land]], self._near_c[r[land], c[land]])
+            idx = np.flatnonzero(blocked)[land]
+            out[idx, 0], out[idx, 1] = x, y
+        return out
+
     def stitch(self, waypoints: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """`waypoints` with every stretch of a leg that crosses blocked ground (a search track over a
         driftwood log, a boulder ring) replaced by a route around that stretch only. Returns the
@@ -73,8 +85,7 @@ class Router:
         Only the blocked stretch is detoured, from the last free point before it to the first free
         point after it: routing the whole leg instead would replace a 900 m search track by an
         OMPL path that wanders metres off the track the plan counted on sweeping."""
-        pts = np.array([self.reachable(p) for p in np.asarray(waypoints, dtype=np.float64).reshape(-1, 2)])
-        pts = pts.reshape(-1, 2)
+        pts = self.reachable_many(waypoints)
         if len(pts) < 2:
             return pts, np.arange(len(pts))
         free = self.cm.segments_free(pts[:-1], pts[1:])

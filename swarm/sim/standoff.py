@@ -9,6 +9,8 @@ cell over the cost map's free cells, 8-connected, answers for every robot at onc
 
 from __future__ import annotations
 
+from functools import cached_property
+
 import numpy as np
 from scipy.sparse import coo_matrix, csr_matrix
 from scipy.sparse.csgraph import dijkstra
@@ -88,6 +90,13 @@ class SafeGround:
         self.dist, self.pred, _ = dijkstra(
             graph, directed=False, indices=sources, min_only=True, return_predecessors=True
         )
+
+    @cached_property
+    def reach_m(self) -> float:
+        """The largest finite distance to safe ground from any cell (-inf if none is finite): a
+        bound on `distance_m` that answers "could anyone be that far?" without locating anyone."""
+        finite = self.dist[np.isfinite(self.dist)]
+        return float(finite.max()) if len(finite) else -np.inf
 
     def _node(self, xy: np.ndarray) -> np.ndarray:
         row, col = self.cm.cell_of(xy[..., 0], xy[..., 1])

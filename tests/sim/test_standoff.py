@@ -1,5 +1,6 @@
 """Getting clear of a blast over drivable ground: the path ends clear of every mine, runs over
-free cells only, is as long as the distance says, and is never shorter than the straight line."""
+free cells only, is as long as the distance says, and is never shorter than the straight line;
+the router's batched `reachable_many` agrees with `reachable` point by point."""
 
 from __future__ import annotations
 
@@ -11,6 +12,7 @@ from scipy.spatial import cKDTree
 
 from swarm.mission.load import load_mission
 from swarm.planning import build_costmap
+from swarm.sim.router import Router
 from swarm.sim.standoff import SafeGround, free_cell_graph
 
 MINE_CLEAR = Path(__file__).resolve().parents[2] / "missions" / "mine_clear.yaml"
@@ -49,3 +51,28 @@ def test_paths_to_safe_ground_are_free_clear_and_as_long_as_the_distance(costmap
         assert length >= gap - cm.cell_m
     safe = dist == 0
     assert safe.any() and (cKDTree(mines).query(starts[safe])[0] >= safe_m).all()
+
+
+def test_reach_bounds_every_distance_to_safe_ground(costmap) -> None:
+    cm = costmap
+    mines = np.array([[238.1, 113.2], [237.9, 98.0], [297.4, 106.6]])
+    ground = SafeGround(cm, free_cell_graph(cm), mines, 60.0)
+    finite = ground.dist[np.isfinite(ground.dist)]
+    assert ground.reach_m == finite.max() > 0
+    rows, cols = np.nonzero(~cm.blocked)
+    d = ground.distance_m(np.column_stack(cm.center_of(rows, cols)))
+    assert (d[np.isfinite(d)] <= ground.reach_m).all()
+    nowhere = SafeGround(cm, free_cell_graph(cm), mines, 1e6)  # no cell is clear: none finite
+    assert nowhere.reach_m == -np.inf
+
+
+def test_reachable_many_is_reachable_of_each_point(costmap) -> None:
+    cm = costmap
+    router = Router(cm, seed=1)
+    xmin, ymin, xmax, ymax = cm.bounds_m
+    rng = np.random.default_rng(3)
+    pts = np.column_stack([rng.uniform(xmin - 20, xmax + 20, 3000), rng.uniform(ymin - 20, ymax + 20, 3000)])
+    assert not cm.is_free(pts[:, 0], pts[:, 1]).all()  # some land on blocked ground or in the water
+    expected = np.array([router.reachable(p) for p in pts])
+    assert router.reachable_many(pts).tobytes() == expected.tobytes()
+    assert router.reachable_many(np.empty((0, 2))).shape == (0, 2)
