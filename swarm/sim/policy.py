@@ -141,6 +141,10 @@ class ScriptedPolicy:
         self._gave_up: set[tuple[int, int]] = set()  # (robot, object): marks given up as too far
         self._returning = False
         self._links_seen = -1
+        # what the last spread saw (radio components, who was alive), and whether an item has been
+        # opened or given a new audience since: with neither changed, a spread changes nothing
+        self._spread_seen: tuple[np.ndarray, np.ndarray] | None = None
+        self._news = False
         self._safe_cache: tuple[tuple[bytes, float], SafeGround] | None = None
         self._found_cache: tuple[tuple[int, int, int], np.ndarray, cKDTree | None] | None = None
 
@@ -196,6 +200,7 @@ class ScriptedPolicy:
         """Turn what robot i was doing into open work items."""
         env = self.env
         t = env.t_s
+        self._news = True
         reopened = False
         for it in self.items:  # work it had taken over from others is open again
             if it.taken_by != i:
@@ -252,6 +257,7 @@ class ScriptedPolicy:
             return
         audience = self._hearers(finder)
         audience[finder] = True
+        self._news = True
         self.items.append(WorkItem("mark", ROLES[env.role[finder]], env.objects_m[k].copy(), obj=k,
                                    audience=audience, created_s=env.t_s))  # fmt: skip
 
@@ -260,11 +266,17 @@ class ScriptedPolicy:
         if env.links_version == self._links_seen:
             return  # news travels only when the radio graph is updated
         self._links_seen = env.links_version
+        comp = env.links.component[: env.n]
+        alive = env.alive
+        if not self._news and self._spread_seen is not None:
+            seen_comp, seen_alive = self._spread_seen
+            if np.array_equal(comp, seen_comp) and np.array_equal(alive, seen_alive):
+                return  # a spread is idempotent: the same components and robots reach no one new
+        self._spread_seen = (comp.copy(), alive.copy())
+        self._news = False
         open_items = [it for it in self.items if it.taken_by < 0 and it.audience.any()]
         if not open_items:
             return
-        comp = env.links.component[: env.n]
-        alive = env.alive
         # every open item at once: the components its audience reaches (+1: -1 is none), then all of
         # each reached component's robots
         heard = np.array([it.audience for it in open_items]) & alive
@@ -293,7 +305,7 @@ class ScriptedPolicy:
         """Hand open items to idle robots that know of them, most valuable first: stations (a lost
         landing, relay, surveillance or beacon robot's point: each a whole criterion), then the
         pieces of lost tracks (each a sliver of the detection), then marks, and marks only when
-        they are due (`_mark_due`): a robot loitering on a mine early can neither finish a lost
+        they are due (`_marks_due`): a robot loitering on a mine early can neither finish a lost
         searcher's track nor dodge the hazards while it waits. In the last `STAND_BY_LEAD_S` of
         beach operations the stand-bys at end-held beacons (`_stand_by`) come before the tracks
         too, and stay out of their auctions."""
@@ -301,7 +313,8 @@ class ScriptedPolicy:
         late = self._stand_by_first()
         if late:
             self._stand_by(self._idle())
-        routes = [it for it in self.items if it.taken_by < 0 and it.kind == "route"]
+        open_items = [it for it in self.items if it.taken_by < 0]  # no item is opened meanwhile
+        routes = [it for it in open_items if it.kind == "route"]
         stations = [it for it in routes if not it.track]
         if stations and self._idle().any():
             self._auction(stations, self._idle())
@@ -311,15 +324,14 @@ class ScriptedPolicy:
         if tracks and idle.any():
             self._auction(tracks, idle)
             idle = self._idle() & ~kept
-        marks = [it for it in self.items if it.taken_by < 0 and it.kind == "mark"]
-        marks = [it for it in marks if env.object_marker[it.obj] < 0]
+        marks = [it for it in open_items if it.kind == "mark" and env.object_marker[it.obj] < 0]
         if marks and idle.any():
-            still_open = [it for it in self.items if it.taken_by < 0 and it.kind == "route"]
             knows_route = np.zeros(env.n, bool)
-            for it in still_open:
-                knows_route |= it.audience
+            for it in routes:
+                if it.taken_by < 0:  # still open after the auctions
+                    knows_route |= it.audience
             free = idle & ~knows_route
-            due = [it for it in marks if self._mark_due(it, free)]
+            due = self._marks_due(marks, free)
             if due and free.any():
                 c = env.clearance
                 self._auction(due, free, arrive_by_s=None if c is None else c.at_s)
@@ -429,20 +441,23 @@ class ScriptedPolicy:
             self._found_cache = (key, objs, cKDTree(objs) if found else None)
         return self._found_cache[1], self._found_cache[2]
 
-    def _mark_due(self, it: WorkItem, free: np.ndarray) -> bool:
-        """A mark is due once nobody is searching any more, or when the nearest robot free to take it
-        must set off to be on the mine before the clearance (with the retreat factor's slack and
-        `MARK_SLACK_S` to spare); with no clearance, at once."""
+    def _marks_due(self, marks: list[WorkItem], free: np.ndarray) -> list[WorkItem]:
+        """The marks that are due: all once nobody is searching any more, else those whose nearest
+        robot free to take it (and knowing of it) must set off to be on the mine before the
+        clearance (with the retreat factor's slack and `MARK_SLACK_S` to spare); with no
+        clearance, all at once."""
         env = self.env
         c = env.clearance
         if c is None or not (env.routes.in_track() & env.alive).any():
-            return True
-        cand = np.flatnonzero(free & it.audience)
-        if not len(cand):
-            return False
-        gap = float(np.min(np.hypot(*(env.robot_state[cand, :2] - it.start_m).T)))
+            return marks
+        cand = np.array([it.audience for it in marks]) & free  # (marks, n)
+        starts = np.array([it.start_m for it in marks])
+        xy = env.robot_state[:, :2]
+        dist = np.hypot(xy[None, :, 0] - starts[:, None, 0], xy[None, :, 1] - starts[:, None, 1])
+        gap = np.where(cand, dist, np.inf).min(axis=1)
         travel = RETREAT_TIME_FACTOR * gap / env.limits.cruise_speed_mps
-        return env.t_s + travel + MARK_SLACK_S >= c.at_s - self.lead_s()
+        due = cand.any(axis=1) & (env.t_s + travel + MARK_SLACK_S >= c.at_s - self.lead_s())
+        return [it for it, d in zip(marks, due.tolist(), strict=True) if d]
 
     def _auction(
         self, open_items: list[WorkItem], idle: np.ndarray, arrive_by_s: float | None = None
@@ -544,6 +559,10 @@ class ScriptedPolicy:
             return True
         if left > HOLD_HORIZON_S:
             return False
+        safe_m = c.standoff_m + STANDOFF_MARGIN_M
+        ground = self._safe_cached(self._found_mines()[0], safe_m)
+        if ground is not None and self._retreat_s(ground.reach_m) < left:
+            return False  # not even the farthest cell from safe ground is that far
         objs, safe_m, near = self._inside_standoff(np.flatnonzero(env.alive & env.on_map & (env.marking < 0)))
         if not len(near):
             return False
@@ -552,8 +571,12 @@ class ScriptedPolicy:
         far = far[np.isfinite(far)]
         if not len(far):
             return False
-        far_m = float(far.max())
-        return RETREAT_TIME_FACTOR * far_m / env.limits.cruise_speed_mps + RETREAT_ALLOWANCE_S >= left
+        return self._retreat_s(float(far.max())) >= left
+
+    def _retreat_s(self, distance_m: float) -> float:
+        """The time allowed to retreat `distance_m` over free ground (at cruise speed, with the
+        retreat factor and allowance)."""
+        return RETREAT_TIME_FACTOR * distance_m / self.env.limits.cruise_speed_mps + RETREAT_ALLOWANCE_S
 
     def _hold(self, time_left_s: float, safe_m: float) -> None:
         """Everyone but the markers stops; those within `safe_m` of a marked mine move clear first.
@@ -599,6 +622,7 @@ class ScriptedPolicy:
             for it in self.items:
                 if it.kind == "mark" and it.obj == k and it.taken_by == i:
                     it.taken_by = -1
+                    self._news = True
             self._gave_up.add((int(i), k))
             env.set_command(int(i), LOITER)  # drops the mark
         return marked
@@ -630,6 +654,12 @@ class ScriptedPolicy:
         xy = env.robot_state[i, :2]
         path = self._safe_ground(objs, safe_m).path(env.router.snap(xy))
         env.set_route(i, np.vstack([xy[None], path]))
+
+    def _safe_cached(self, objs: np.ndarray, safe_m: float) -> SafeGround | None:
+        """`_safe_ground` of these objects if it has been built already, else None."""
+        if self._safe_cache is not None and self._safe_cache[0] == (objs.tobytes(), safe_m):
+            return self._safe_cache[1]
+        return None
 
     def _safe_ground(self, objs: np.ndarray, safe_m: float) -> SafeGround:
         """Distances to safe ground from everywhere (kept until the objects change: robots park
