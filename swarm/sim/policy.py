@@ -310,6 +310,8 @@ class ScriptedPolicy:
         beach operations the stand-bys at end-held beacons (`_stand_by`) come before the tracks
         too, and stay out of their auctions."""
         env = self.env
+        if not self._idle().any():
+            return  # every step below waits for an idle robot, and none becomes idle meanwhile
         late = self._stand_by_first()
         if late:
             self._stand_by(self._idle())
@@ -525,8 +527,9 @@ class ScriptedPolicy:
         c = env.clearance
         if c is None or self._clearance_state == "done":
             return
-        if self._clearance_state == "before" and c.at_s - env.t_s <= HOLD_HORIZON_S:
-            self._drop_late_markers(c.at_s - env.t_s)  # the allocation parks them clear
+        left = c.at_s - env.t_s
+        if self._clearance_state == "before" and left <= HOLD_HORIZON_S:
+            self._drop_late_markers(left)  # the allocation parks them clear
         if self._clearance_state == "before" and self._hold_due():
             self._clearance_state = "holding"
             self._hold(c.at_s - env.t_s, c.standoff_m + STANDOFF_MARGIN_M)
@@ -600,11 +603,13 @@ class ScriptedPolicy:
         line) at cruise speed, with the retreat factor's slack and allowance."""
         env = self.env
         xy = env.robot_state[i, :2]
-        route = np.vstack([xy[None], env.routes.remaining(i)])
-        length = max(
-            float(np.hypot(*np.diff(route, axis=0).T).sum()), float(np.hypot(*(xy - env.objects_m[k])))
-        )
-        return RETREAT_TIME_FACTOR * length / env.limits.cruise_speed_mps + RETREAT_ALLOWANCE_S
+        rest = env.routes.remaining(i)
+        legs = np.empty_like(rest)  # from where it stands along the rest (no stacked copy of it)
+        if len(rest):
+            legs[0] = rest[0] - xy
+            np.subtract(rest[1:], rest[:-1], out=legs[1:])
+        length = max(float(np.hypot(legs[:, 0], legs[:, 1]).sum()), float(np.hypot(*(xy - env.objects_m[k]))))
+        return self._retreat_s(length)
 
     def _drop_late_markers(self, time_left_s: float) -> np.ndarray:
         """Robots on their way to mark a mine that can no longer get there before the detonation
