@@ -24,11 +24,10 @@ DENSE_NEAREST_PAIRS = 200_000
 
 
 class _Neighbours:
-    """One run's radio neighbour bookkeeping, kept between radio updates (`Observer._refresh`);
-    its table and link flags live in the observer's batch arrays."""
+    """One run's working links as sorted keys, kept between radio updates (`Observer._link_keys`);
+    its neighbour table and link flags live in the observer's batch arrays."""
 
     def __init__(self) -> None:
-        self.signature: tuple[int, int] | None = None
         self.keys_version = -1
         self.keys = np.empty(0, dtype=np.int64)
 
@@ -56,12 +55,16 @@ class Observer:
         #: (runs, n, k) each robot's table neighbours (-1: none) and whether the link to each works.
         self._tables = np.full((runs, self.n, k), -1, dtype=np.intp)
         self._linked = np.zeros((runs, self.n, k), bool)
+        #: (runs,) the radio update and the count of robots on the map each run's table is of.
+        self._table_version = np.full(runs, -1, dtype=np.int64)
+        self._table_count = np.full(runs, -1, dtype=np.int64)
 
     def reset_run(self, b: int) -> None:
         """Forget run b's neighbour tables (a new episode)."""
         self._nb.pop(b, None)
         self._tables[b] = -1
         self._linked[b] = False
+        self._table_version[b] = -1
 
     def flat_cell(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
         """Row-major index of the cell under each point (the nearest edge cell outside the map)."""
@@ -149,17 +152,13 @@ class Observer:
         return out.reshape(r, n, lay.size)
 
     # neighbours ---------------------------------------------------------------------------------------
-    def _refresh(self, run, b: int, on: np.ndarray, count: int) -> None:
+    def _refresh(self, run, b: int, on: np.ndarray) -> None:
         """Run b's neighbour table, (n, k) ids of each robot's k nearest live robots, as of the last
         radio update or change in who is on the map (the table its radio keeps), and which of
         those links work: fixed until the next radio update, which refreshes the table."""
         nb = self._nb.get(b)
         if nb is None:
             nb = self._nb[b] = _Neighbours()
-        signature = (run.links_version, count)
-        if nb.signature == signature:
-            return
-        nb.signature = signature
         live = np.flatnonzero(on)
         k = self.layout.neighbours
         table = np.full((self.n, k), -1, dtype=np.intp)
@@ -186,9 +185,13 @@ class Observer:
         if k == 0:
             return
         n, r = self.n, len(runs)
-        counts = np.count_nonzero(here, axis=1).tolist()
-        for j, b in enumerate(runs):
-            self._refresh(world.runs[b], b, here[j], counts[j])
+        counts = np.count_nonzero(here, axis=1)
+        versions = np.fromiter((world.runs[b].links_version for b in runs), np.int64, r)
+        stale = (versions != self._table_version[runs]) | (counts != self._table_count[runs])
+        for j in np.flatnonzero(stale).tolist():
+            b = runs[j]
+            self._refresh(world.runs[b], b, here[j])
+            self._table_version[b], self._table_count[b] = versions[j], counts[j]
         table = self._tables[runs].reshape(r * n, k)
         valid = table >= 0
         me = valid.any(axis=1) & here.ravel()
@@ -212,6 +215,8 @@ class Observer:
         dense: list[int] = []
         for j, b in enumerate(runs):
             run = world.runs[b]
+            if not len(run.object_marker):
+                continue
             count = int(np.count_nonzero(run.object_marker < 0))
             if not count:
                 continue
