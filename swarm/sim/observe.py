@@ -24,12 +24,10 @@ DENSE_NEAREST_PAIRS = 200_000
 
 
 class _Neighbours:
-    """One run's radio neighbour tables, kept between radio updates (`Observer._table`)."""
+    """One run's working links as sorted keys, kept between radio updates (`Observer._link_keys`);
+    its neighbour table and link flags live in the observer's batch arrays."""
 
-    def __init__(self, n: int, k: int) -> None:
-        self.signature: tuple[int, int] | None = None
-        self.table = np.full((n, k), -1, dtype=np.intp)
-        self.linked = np.zeros((n, k), bool)
+    def __init__(self) -> None:
         self.keys_version = -1
         self.keys = np.empty(0, dtype=np.int64)
 
@@ -53,16 +51,20 @@ class Observer:
             np.float32
         )
         self._nb: dict[int, _Neighbours] = {}  # per observed run, made when first needed
+        k = layout.neighbours
+        #: (runs, n, k) each robot's table neighbours (-1: none) and whether the link to each works.
+        self._tables = np.full((runs, self.n, k), -1, dtype=np.intp)
+        self._linked = np.zeros((runs, self.n, k), bool)
+        #: (runs,) the radio update and the count of robots on the map each run's table is of.
+        self._table_version = np.full(runs, -1, dtype=np.int64)
+        self._table_count = np.full(runs, -1, dtype=np.int64)
 
     def reset_run(self, b: int) -> None:
         """Forget run b's neighbour tables (a new episode)."""
         self._nb.pop(b, None)
-
-    def _neighbours_of(self, b: int) -> _Neighbours:
-        nb = self._nb.get(b)
-        if nb is None:
-            nb = self._nb[b] = _Neighbours(self.n, self.layout.neighbours)
-        return nb
+        self._tables[b] = -1
+        self._linked[b] = False
+        self._table_version[b] = -1
 
     def flat_cell(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
         """Row-major index of the cell under each point (the nearest edge cell outside the map)."""
@@ -138,74 +140,109 @@ class Observer:
         task[:, nr + 2] = np.hypot(gb[:, 0], gb[:, 1])
         task[:, nr + 3] = progress_all
         task[:, nr + 4] = pick(world.marking) >= 0
+        here = pick(world.alive & world.on_map).reshape(r, n)
+        self._observe_neighbours(world, runs, here, s, out[:, sl["neighbours"]])
+        self._observe_objects(world, runs, s, task[:, nr + 5 : nr + 7])
         clearance = self.setup.clearance
-        for j, b in enumerate(runs):
-            run = world.runs[b]
-            rows_b = slice(j * n, (j + 1) * n)
-            self._observe_neighbours(run, self._neighbours_of(b), out[rows_b, sl["neighbours"]])
-            unmarked = run.object_marker < 0
-            if unmarked.any():
-                objs = run.objects_m[unmarked]
-                xy = s[rows_b, :2]
-                near = _nearest(objs, xy)
-                task[rows_b, nr + 5 : nr + 7] = to_body(objs[near] - xy, heading[rows_b])
-            t = run.t_s
-            task[rows_b, nr + 7] = min(1.0, t / self.setup.time_limit_s)
-            if clearance is not None and not run.cleared:
-                task[rows_b, nr + 8] = max(0.0, clearance.at_s - t)
+        t_s = world.t_s[runs]
+        task[:, nr + 7] = np.repeat(np.minimum(1.0, t_s / self.setup.time_limit_s), n)
+        if clearance is not None:
+            waiting = np.array([not world.runs[b].cleared for b in runs])
+            task[:, nr + 8] = np.repeat(np.where(waiting, np.maximum(0.0, clearance.at_s - t_s), 0.0), n)
         return out.reshape(r, n, lay.size)
 
     # neighbours ---------------------------------------------------------------------------------------
-    def _table(self, run, nb: _Neighbours) -> np.ndarray:
-        """(n, k) ids of each robot's k nearest live robots (-1: none), as of the last radio
-        update or change in who is on the map: the neighbour table its radio keeps."""
-        on = run.alive & run.on_map
-        signature = (run.links_version, int(np.count_nonzero(on)))
-        if nb.signature != signature:
-            nb.signature = signature
-            live = np.flatnonzero(on)
-            k = self.layout.neighbours
-            table = np.full((self.n, k), -1, dtype=np.intp)
-            q = min(k + 1, len(live))
-            if k and q >= 2:
-                xy = run.robot_state[live, :2]
-                _, idx = cKDTree(xy, balanced_tree=False, compact_nodes=False).query(xy, k=q)
-                table[live, : q - 1] = live[idx[:, 1:]]  # the first is itself
-            nb.table = table
-            # which of those links work: fixed until the next radio update, which refreshes the table
-            keys = self._link_keys(run, nb)
-            query = np.repeat(np.arange(self.n), k).astype(np.int64) * run.links.adjacency.shape[0]
-            query += np.maximum(table, 0).ravel()
-            at = np.minimum(np.searchsorted(keys, query), max(len(keys) - 1, 0))
-            hit = keys[at] == query if len(keys) else np.zeros(len(query), bool)
-            nb.linked = hit.reshape(self.n, k) & (table >= 0)
-        return nb.table
+    def _refresh(self, run, b: int, on: np.ndarray) -> None:
+        """Run b's neighbour table, (n, k) ids of each robot's k nearest live robots, as of the last
+        radio update or change in who is on the map (the table its radio keeps), and which of
+        those links work: fixed until the next radio update, which refreshes the table."""
+        nb = self._nb.get(b)
+        if nb is None:
+            nb = self._nb[b] = _Neighbours()
+        live = np.flatnonzero(on)
+        k = self.layout.neighbours
+        table = np.full((self.n, k), -1, dtype=np.intp)
+        q = min(k + 1, len(live))
+        if q >= 2:
+            xy = run.robot_state[live, :2]
+            _, idx = cKDTree(xy, balanced_tree=False, compact_nodes=False).query(xy, k=q)
+            table[live, : q - 1] = live[idx[:, 1:]]  # the first is itself
+        self._tables[b] = table
+        keys = self._link_keys(run, nb)
+        query = np.repeat(np.arange(self.n), k).astype(np.int64) * run.links.adjacency.shape[0]
+        query += np.maximum(table, 0).ravel()
+        at = np.minimum(np.searchsorted(keys, query), max(len(keys) - 1, 0))
+        hit = keys[at] == query if len(keys) else np.zeros(len(query), bool)
+        self._linked[b] = hit.reshape(self.n, k) & (table >= 0)
 
-    def _observe_neighbours(self, run, nb: _Neighbours, block: np.ndarray) -> None:
-        """Each robot's table neighbours at their current positions: present, body-frame offset,
-        distance, radio link working."""
+    def _observe_neighbours(
+        self, world, runs: list[int], here: np.ndarray, state: np.ndarray, block: np.ndarray
+    ) -> None:
+        """Each robot's table neighbours at their current positions, every run at once: present,
+        body-frame offset, distance, radio link working (zero for robots not on the map).
+        `here` (r, n): on the map; `state` (r * n, 6); `block` (r * n, 5 k) is written."""
         k = self.layout.neighbours
         if k == 0:
             return
-        table = self._table(run, nb)
-        here = run.alive & run.on_map
-        me = np.flatnonzero((table >= 0).any(axis=1) & here)
-        if not len(me):
+        n, r = self.n, len(runs)
+        counts = np.count_nonzero(here, axis=1)
+        versions = np.fromiter((world.runs[b].links_version for b in runs), np.int64, r)
+        stale = (versions != self._table_version[runs]) | (counts != self._table_count[runs])
+        for j in np.flatnonzero(stale).tolist():
+            b = runs[j]
+            self._refresh(world.runs[b], b, here[j])
+            self._table_version[b], self._table_count[b] = versions[j], counts[j]
+        table = self._tables[runs].reshape(r * n, k)
+        valid = table >= 0
+        me = valid.any(axis=1) & here.ravel()
+        if not me.any():
             return
-        other = table[me]
-        present = (other >= 0) & here[np.maximum(other, 0)]
-        state = run.robot_state
-        xy = state[me, :2]
-        rel = to_body(state[np.maximum(other, 0), :2] - xy[:, None, :], state[me, 2])
-        dist = np.hypot(rel[..., 0], rel[..., 1])
-        linked = nb.linked[me]
-        view = np.zeros((len(me), k, 5), np.float32)
+        other = np.maximum(table, 0) + (np.arange(r) * n).repeat(n)[:, None]  # rows of `state`
+        present = valid & here.ravel()[other] & me[:, None]
+        rel = to_body(state[other, :2] - state[:, None, :2], state[:, 2])
+        view = np.zeros((r * n, k, 5), np.float32)
         view[..., 0] = present
         view[..., 1:3] = rel
-        view[..., 3] = dist
-        view[..., 4] = linked
+        view[..., 3] = np.hypot(rel[..., 0], rel[..., 1])
+        view[..., 4] = self._linked[runs].reshape(r * n, k)
         view[~present] = 0.0
-        block[me] = view.reshape(len(me), 5 * k)
+        block[me] = view[me].reshape(-1, 5 * k)
+
+    def _observe_objects(self, world, runs: list[int], state: np.ndarray, block: np.ndarray) -> None:
+        """Body-frame offset to the nearest object found and not yet marked, every run at once
+        where the runs' objects are few (dense distances, padded), by a k-d tree where many."""
+        n = self.n
+        dense: list[int] = []
+        for j, b in enumerate(runs):
+            run = world.runs[b]
+            if not len(run.object_marker):
+                continue
+            count = int(np.count_nonzero(run.object_marker < 0))
+            if not count:
+                continue
+            if count * n <= DENSE_NEAREST_PAIRS:
+                dense.append(j)
+                continue
+            rows = slice(j * n, (j + 1) * n)
+            objs = run.objects_m[run.object_marker < 0]
+            xy = state[rows, :2]
+            near = cKDTree(objs).query(xy)[1]
+            block[rows] = to_body(objs[near] - xy, state[rows, 2])
+        if not dense:
+            return
+        width = max(len(world.runs[runs[j]].objects_m) for j in dense)
+        objs = np.zeros((len(dense), width, 2))
+        open_ = np.zeros((len(dense), width), bool)
+        for d, j in enumerate(dense):
+            run = world.runs[runs[j]]
+            objs[d, : len(run.objects_m)] = run.objects_m
+            open_[d, : len(run.objects_m)] = run.object_marker < 0
+        rows = (np.asarray(dense)[:, None] * n + np.arange(n)).ravel()
+        xy = state[rows, :2].reshape(len(dense), n, 2)
+        d2 = (xy[:, :, None, 0] - objs[:, None, :, 0]) ** 2 + (xy[:, :, None, 1] - objs[:, None, :, 1]) ** 2
+        near = np.argmin(np.where(open_[:, None, :], d2, np.inf), axis=2)  # the first of equals, as alone
+        target = np.take_along_axis(objs, near[..., None], axis=1)
+        block[rows] = to_body((target - xy).reshape(-1, 2), state[rows, 2])
 
     @staticmethod
     def _link_keys(run, nb: _Neighbours) -> np.ndarray:
@@ -217,11 +254,3 @@ class Observer:
             nb.keys = rows * adj.shape[0] + adj.indices
             nb.keys_version = run.links_version
         return nb.keys
-
-
-def _nearest(points: np.ndarray, queries: np.ndarray) -> np.ndarray:
-    """Index of the nearest of `points` to each query: dense for small sets, a k-d tree beyond."""
-    if len(points) * len(queries) <= DENSE_NEAREST_PAIRS:
-        d2 = (queries[:, None, 0] - points[None, :, 0]) ** 2 + (queries[:, None, 1] - points[None, :, 1]) ** 2
-        return np.argmin(d2, axis=1)
-    return cKDTree(points).query(queries)[1]

@@ -220,7 +220,11 @@ class SwarmVectorEnv:
         runs = list(range(b))
         obs = self._observe(runs)
         obs[~was_in] = 0.0
-        outcomes = [StepOutcome(float(change[k]), ended[k], bool(time_up[k])) for k in runs]
+        outcomes = (
+            []
+            if self._batched_reward and self._batched_terminated
+            else [StepOutcome(float(change[k]), ended[k], bool(time_up[k])) for k in runs]
+        )
         if self._batched_reward:
             rewards = np.where(was_in, change[:, None], 0.0)
         else:

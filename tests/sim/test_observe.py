@@ -1,0 +1,98 @@
+"""The default observation of a batch of runs (`swarm.sim.observe.Observer`), checked against the
+layout's definitions computed robot by robot: the nearest known unmarked mine and the table
+neighbours in each robot's body frame. Observing some of the runs gives those runs' rows of
+observing all of them."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from tiny_missions import write_mission
+
+import swarm.sim
+from swarm.sim import observe
+
+RUNS, ROBOTS = 3, 6
+
+
+@pytest.fixture(scope="module")
+def vec(tmp_path_factory: pytest.TempPathFactory):
+    path: Path = write_mission(tmp_path_factory.mktemp("observe"), "observe", swarm={"count": ROBOTS})
+    env = swarm.sim.vector_env(mission=path, num_envs=RUNS, seed=3)
+    env.reset(seed=3)
+    rng = np.random.default_rng(0)
+    for _ in range(150):  # everyone on the map
+        env.step(rng.uniform(-1.0, 1.0, (RUNS, ROBOTS, 3)).astype(np.float32))
+    return env
+
+
+def _column(env, name: str) -> int:
+    return env.envs[0].layout.names.index(name)
+
+
+def _body(dxy: np.ndarray, heading: float) -> np.ndarray:
+    c, s = np.cos(heading), np.sin(heading)
+    return np.array([c * dxy[0] + s * dxy[1], -s * dxy[0] + c * dxy[1]])
+
+
+@pytest.mark.parametrize("dense_pairs", [observe.DENSE_NEAREST_PAIRS, 0], ids=["dense", "k-d tree"])
+def test_nearest_unmarked_mine_in_the_body_frame(vec, dense_pairs, monkeypatch) -> None:
+    """Runs with none, one and many mines found, half of them marked: each robot sees the offset
+    to the nearest unmarked one (0 when there is none), whichever way it is searched for."""
+    monkeypatch.setattr(observe, "DENSE_NEAREST_PAIRS", dense_pairs)
+    rng = np.random.default_rng(7)
+    saved = [(r.objects_m, r.object_marker) for r in vec.world.runs]
+    try:
+        for run, count in zip(vec.world.runs, (0, 1, 40), strict=True):
+            run.objects_m = rng.uniform(-50.0, 50.0, (count, 2)) + run.robot_state[0, :2]
+            run.object_marker = np.where(np.arange(count) % 2 == 0, -1, 0)
+        obs = vec.observer.observe(vec.world, list(range(RUNS)))
+        x = _column(vec, "mine_dx_m")
+        for b, run in enumerate(vec.world.runs):
+            unmarked = run.objects_m[run.object_marker < 0]
+            for i in range(ROBOTS):
+                xy, heading = run.robot_state[i, :2], run.robot_state[i, 2]
+                if len(unmarked):
+                    nearest = unmarked[np.argmin(np.hypot(*(unmarked - xy).T))]
+                    expected = _body(nearest - xy, heading)
+                else:
+                    expected = np.zeros(2)
+                np.testing.assert_allclose(obs[b, i, x : x + 2], expected, rtol=1e-6, atol=1e-4)
+    finally:
+        for run, (objects, marker) in zip(vec.world.runs, saved, strict=True):
+            run.objects_m, run.object_marker = objects, marker
+
+
+def test_neighbours_are_the_table_robots_in_the_body_frame(vec) -> None:
+    """Each present neighbour's columns: the offset to that robot in the body frame, its
+    distance, and whether their link works; absent slots are zero."""
+    obs = vec.observer.observe(vec.world, list(range(RUNS)))
+    first = _column(vec, "n0_present")
+    k = vec.envs[0].layout.neighbours
+    checked = 0
+    for b, run in enumerate(vec.world.runs):
+        links = run.links.adjacency.tocsr()
+        here = run.alive & run.on_map
+        table = vec.observer._tables[b]
+        for i in np.flatnonzero(here):
+            for slot in range(k):
+                cols = obs[b, i, first + 5 * slot : first + 5 * slot + 5]
+                j = table[i, slot]
+                if j < 0 or not here[j]:
+                    assert not cols.any()
+                    continue
+                offset = _body(run.robot_state[j, :2] - run.robot_state[i, :2], run.robot_state[i, 2])
+                np.testing.assert_allclose(cols[1:3], offset, rtol=1e-6, atol=1e-4)
+                assert cols[0] == 1.0
+                assert cols[3] == pytest.approx(np.hypot(*offset), rel=1e-6, abs=1e-4)
+                assert cols[4] == float(links[i, j] != 0)
+                checked += 1
+    assert checked >= RUNS * ROBOTS  # most robots have neighbours
+
+
+def test_observing_some_runs_gives_their_rows_of_all(vec) -> None:
+    every = vec.observer.observe(vec.world, list(range(RUNS)))
+    some = vec.observer.observe(vec.world, [2, 0])
+    np.testing.assert_array_equal(some, every[[2, 0]])
