@@ -295,7 +295,7 @@ class RadioNet:
         nn = big_n * big_n
         table = self.neighbour_table
         dense = np.full(k, self.n <= DENSE_ROBOTS)
-        if table is not None:
+        if table is not None and self.n > table + 1:
             dense &= np.count_nonzero(finite[:, : self.n], axis=1) <= table + 1
         parts = []
         if dense.all():
@@ -330,8 +330,10 @@ class RadioNet:
                     near |= pairs & (np.hypot(span_x, span_y) <= r_rr)[:, None, None]
                 mask[:, :n, :n] = near
             if self.f and r_rf > 0:
-                d = np.linalg.norm(pos[:, :n, None, :] - self.fixed_m[None, None, :, :], axis=3)
-                mask[:, :n, n:] = (d <= r_rf) & live[:, :, None]
+                # sqrt(dx^2 + dy^2), as `np.linalg.norm` computes it in `_candidates`
+                dx = pos[:, :n, 0, None] - self.fixed_m[:, 0]
+                dy = pos[:, :n, 1, None] - self.fixed_m[:, 1]
+                mask[:, :n, n:] = (np.sqrt(dx * dx + dy * dy) <= r_rf) & live[:, :, None]
         mask[:, n:, n:] = self._ff_mask
         return mask
 
@@ -491,8 +493,8 @@ def _shadowing(
 
 def _links(net: RadioNet, k: int, u: np.ndarray, v: np.ndarray, margin: np.ndarray) -> list[Links]:
     """Each run's `Links` from the working pairs u < v (batch node ids ``b * N + i``, in key order)
-    of k runs: one CSR of the block-diagonal graph of all the runs, one component search on it,
-    one breadth-first search from a super-source linked to every run's source."""
+    of k runs: one CSR of the block-diagonal graph of all the runs, one component search and one
+    hop search from all the sources on it."""
     n, big_n = net.n, net.n_nodes
     nodes = k * big_n
     rows = np.concatenate([v, u]).astype(np.int32)
@@ -502,8 +504,11 @@ def _links(net: RadioNet, k: int, u: np.ndarray, v: np.ndarray, margin: np.ndarr
     counts = np.bincount(rows, minlength=nodes)
     indptr = np.zeros(nodes + 1, dtype=np.int32)
     np.cumsum(counts, out=indptr[1:])
-    component = _components(indptr, indices, k, big_n)
-    hops = _source_hops(indptr, indices, k, n, big_n)
+    # csgraph works on float weights: hand it one (unit weights) rather than have it convert a bool
+    # matrix, once for both searches
+    graph = scipy.sparse.csr_matrix((np.ones(len(indices)), indices, indptr), shape=(nodes, nodes))
+    component = _components(graph, k, big_n)
+    hops = _source_hops(graph, k, n, big_n)
     degree = counts.reshape(k, big_n)[:, :n].astype(np.intp)
     out = []
     for b in range(k):
@@ -514,27 +519,21 @@ def _links(net: RadioNet, k: int, u: np.ndarray, v: np.ndarray, margin: np.ndarr
     return out
 
 
-def _components(indptr: np.ndarray, indices: np.ndarray, k: int, big_n: int) -> np.ndarray:
+def _components(graph: scipy.sparse.csr_matrix, k: int, big_n: int) -> np.ndarray:
     """(k, N) connected-component labels of each run's graph, numbered within the run as a search
     on that run alone numbers them: the search visits the block-diagonal graph's runs one after
     another, so run b's labels are its own shifted by the components of the runs before it."""
-    # csgraph works on float weights: hand it one (unit weights) rather than have it convert a bool
-    # matrix; the matrix is symmetric, so "directed" saves a transpose, same answer
-    nodes = k * big_n
-    graph = scipy.sparse.csr_matrix((np.ones(len(indices)), indices, indptr), shape=(nodes, nodes))
+    # the matrix is symmetric, so "directed" saves a transpose, same answer
     _, labels = connected_components(graph, directed=True, connection="strong")
     labels = labels.reshape(k, big_n)
     return labels - labels.min(axis=1, keepdims=True) if big_n else labels
 
 
-def _source_hops(indptr: np.ndarray, indices: np.ndarray, k: int, n: int, big_n: int) -> np.ndarray:
+def _source_hops(graph: scipy.sparse.csr_matrix, k: int, n: int, big_n: int) -> np.ndarray:
     """(k, n) hops from each run's source (node n) to its robots, -1 when unreachable or there is
-    no source: one unweighted shortest-path search from an extra node with an arc to every source."""
+    no source: one unweighted search from all the sources at once (no run reaches another's)."""
     if big_n == n:
         return np.full((k, n), -1, dtype=np.intp)
-    nodes = k * big_n
-    ptr = np.append(indptr, indptr[-1] + k).astype(np.int32)
-    idx = np.concatenate([indices, np.arange(k, dtype=np.int32) * big_n + n])
-    graph = scipy.sparse.csr_matrix((np.ones(len(idx)), idx, ptr), shape=(nodes + 1, nodes + 1))
-    dist = dijkstra(graph, directed=True, indices=nodes, unweighted=True)[:nodes].reshape(k, big_n)
-    return np.where(np.isfinite(dist), dist - 1.0, -1.0)[:, :n].astype(np.intp)
+    sources = np.arange(k) * big_n + n
+    dist = dijkstra(graph, directed=True, indices=sources, unweighted=True, min_only=True).reshape(k, big_n)
+    return np.where(np.isfinite(dist), dist, -1.0)[:, :n].astype(np.intp)
