@@ -403,6 +403,8 @@ def update_nets(
 
     Every net takes its draws in its own key order, as alone, so each gets the `Links` it would
     get from its own `update` (module docstring: batches)."""
+    if not nets:
+        return []
     net = nets[0]
     k, n, big_n = len(nets), net.n, net.n_nodes
     if any(other._config != net._config for other in nets[1:]):
