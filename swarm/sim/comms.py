@@ -63,7 +63,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse
-from scipy.sparse.csgraph import connected_components, dijkstra, maximum_flow
+from scipy.sparse.csgraph import breadth_first_order, connected_components, maximum_flow
 from scipy.spatial import cKDTree
 
 from swarm.errors import SwarmError
@@ -206,6 +206,12 @@ def _node_connectivity(
 
 
 @functools.lru_cache(maxsize=64)
+def _shared(config: tuple) -> tuple:
+    """The first of equal configurations, so that the nets of a batch compare theirs by identity."""
+    return config
+
+
+@functools.lru_cache(maxsize=64)
 def _candidate_range_m(radio: RadioParams, sigmas: float) -> float:
     """Largest distance at which P_rx(d) + sigmas * sigma >= sensitivity; 0 if not even at 1 mm.
     Cached: every run of a study builds its nets with the same radios."""
@@ -254,8 +260,8 @@ class RadioNet:
             dataclasses.replace(radio, tx_height_m=fixed_height_m, rx_height_m=fixed_height_m),
         )
         self.candidate_range_m = tuple(_candidate_range_m(r, CANDIDATE_SIGMAS) for r in self._radios)
-        # what nets updated together must share (`update_nets`)
-        self._config = (self._radios, self.n, fixed.tobytes(), self.decorrelation_m, neighbour_table)
+        # what nets updated together must share (`update_nets`); equal ones are one object
+        self._config = _shared((self._radios, self.n, fixed.tobytes(), self.decorrelation_m, neighbour_table))
         # per-pair state, sorted by key i * N + j (i < j)
         self._keys = np.empty(0, dtype=np.int64)
         self._shadow_db = np.empty(0)
@@ -407,7 +413,7 @@ def update_nets(
         return []
     net = nets[0]
     k, n, big_n = len(nets), net.n, net.n_nodes
-    if any(other._config != net._config for other in nets[1:]):
+    if any(other._config is not net._config and other._config != net._config for other in nets[1:]):
         raise ValueError("comms: nets updated together must share radio, robots and fixed nodes")
     xy = np.asarray(xy, dtype=np.float64)
     up = np.asarray(up, dtype=bool)
@@ -496,29 +502,49 @@ def _shadowing(
 def _links(net: RadioNet, k: int, u: np.ndarray, v: np.ndarray, margin: np.ndarray) -> list[Links]:
     """Each run's `Links` from the working pairs u < v (batch node ids ``b * N + i``, in key order)
     of k runs: one CSR of the block-diagonal graph of all the runs, one component search and one
-    hop search from all the sources on it."""
+    breadth-first search from all the sources on it."""
     n, big_n = net.n, net.n_nodes
     nodes = k * big_n
+    # lower triangle first: with the pairs in key order, a stable sort by row leaves every row's
+    # columns ascending (CSR order)
     rows = np.concatenate([v, u]).astype(np.int32)
     cols = np.concatenate([u, v]).astype(np.int32)
-    order = np.argsort(rows.astype(np.int64) * nodes + cols)  # CSR order; the keys are unique
+    order = np.argsort(rows, kind="stable")
     indices, margins = cols[order], np.concatenate([margin, margin])[order]
     counts = np.bincount(rows, minlength=nodes)
     indptr = np.zeros(nodes + 1, dtype=np.int32)
     np.cumsum(counts, out=indptr[1:])
-    # csgraph works on float weights: hand it one (unit weights) rather than have it convert a bool
-    # matrix, once for both searches
-    graph = scipy.sparse.csr_matrix((np.ones(len(indices)), indices, indptr), shape=(nodes, nodes))
+    graph = _search_graph(indptr, indices, k, n, big_n)
     component = _components(graph, k, big_n)
     hops = _source_hops(graph, k, n, big_n)
     degree = counts.reshape(k, big_n)[:, :n].astype(np.intp)
-    out = []
-    for b in range(k):
-        lo, hi = int(indptr[b * big_n]), int(indptr[(b + 1) * big_n])
-        ptr = indptr[b * big_n : (b + 1) * big_n + 1] - lo
-        idx = indices[lo:hi] - np.int32(b * big_n)
-        out.append(Links(ptr, idx, margins[lo:hi], degree[b], component[b], hops[b]))
-    return out
+    # each run's CSR in its own node ids: a link never leaves its run
+    ends = indptr[np.arange(k + 1) * big_n]
+    ptr = np.empty((k, big_n + 1), dtype=np.int32)
+    ptr[:, :big_n] = indptr[:-1].reshape(k, big_n)
+    ptr[:, big_n] = ends[1:]
+    ptr -= ends[:-1, None]
+    local = indices % np.int32(max(big_n, 1))
+    ends = ends.tolist()
+    return [
+        Links(ptr[b], local[lo:hi], margins[lo:hi], degree[b], component[b], hops[b])
+        for b, lo, hi in zip(range(k), ends[:-1], ends[1:], strict=True)
+    ]
+
+
+def _search_graph(
+    indptr: np.ndarray, indices: np.ndarray, k: int, n: int, big_n: int
+) -> scipy.sparse.csr_matrix:
+    """The block-diagonal graph of the k runs' links, with unit weights (csgraph works on floats:
+    hand it them rather than have it convert a bool matrix). When the runs have a source, one more
+    node after them has an arc to every run's source: the hop search starts there; with no arc
+    into it, it is a component of its own, numbered after all the others."""
+    nodes = k * big_n
+    if big_n > n:
+        indptr = np.append(indptr, indptr[-1] + k).astype(np.int32)
+        indices = np.concatenate([indices, np.arange(k, dtype=np.int32) * big_n + n])
+        nodes += 1
+    return scipy.sparse.csr_matrix((np.ones(len(indices)), indices, indptr), shape=(nodes, nodes))
 
 
 def _components(graph: scipy.sparse.csr_matrix, k: int, big_n: int) -> np.ndarray:
@@ -527,15 +553,34 @@ def _components(graph: scipy.sparse.csr_matrix, k: int, big_n: int) -> np.ndarra
     another, so run b's labels are its own shifted by the components of the runs before it."""
     # the matrix is symmetric, so "directed" saves a transpose, same answer
     _, labels = connected_components(graph, directed=True, connection="strong")
-    labels = labels.reshape(k, big_n)
+    labels = labels[: k * big_n].reshape(k, big_n)
     return labels - labels.min(axis=1, keepdims=True) if big_n else labels
 
 
 def _source_hops(graph: scipy.sparse.csr_matrix, k: int, n: int, big_n: int) -> np.ndarray:
     """(k, n) hops from each run's source (node n) to its robots, -1 when unreachable or there is
-    no source: one unweighted search from all the sources at once (no run reaches another's)."""
+    no source: one breadth-first search from the node linked to all the sources (`_search_graph`;
+    no run reaches another's nodes)."""
     if big_n == n:
         return np.full((k, n), -1, dtype=np.intp)
-    sources = np.arange(k) * big_n + n
-    dist = dijkstra(graph, directed=True, indices=sources, unweighted=True, min_only=True).reshape(k, big_n)
-    return np.where(np.isfinite(dist), dist, -1.0)[:, :n].astype(np.intp)
+    root = k * big_n
+    order, parent = breadth_first_order(graph, root, directed=True, return_predecessors=True)
+    depth = _depths(order, parent)
+    return np.maximum(depth[:root] - 1, -1).reshape(k, big_n)[:, :n]
+
+
+def _depths(order: np.ndarray, parent: np.ndarray) -> np.ndarray:
+    """Depth of every node in a breadth-first search tree from ``order[0]`` (-1: not reached).
+
+    The search visits the nodes level by level, each node's parent comes before it in `order` and
+    the parents' places never decrease along it: each level is the stretch of `order` whose parents
+    lie in the level before, found with one binary search."""
+    place = np.empty(len(parent), dtype=np.intp)
+    place[order] = np.arange(len(order))
+    parent_place = place[parent[order[1:]]]
+    depth = np.full(len(parent), -1, dtype=np.intp)
+    lo, hi, level = 0, 1, 0
+    while lo < hi:
+        depth[order[lo:hi]] = level
+        lo, hi, level = hi, 1 + int(np.searchsorted(parent_place, hi)), level + 1
+    return depth

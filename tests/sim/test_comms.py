@@ -14,7 +14,7 @@ import math
 
 import numpy as np
 import pytest
-from scipy.sparse.csgraph import connected_components
+from scipy.sparse.csgraph import connected_components, shortest_path
 from scipy.stats import norm
 
 from swarm.planning.radio import RadioParams, comm_range_m, outage_probability, received_power_dbm
@@ -422,6 +422,11 @@ def test_a_batch_of_nets_gives_each_run_the_links_it_gets_alone(n_robots: int) -
             _assert_same_links(one[b], batch[b])
             assert one[b].fixed_linked(2) == batch[b].fixed_linked(2)
             assert rngs_alone[b].bit_generator.state == rngs_together[b].bit_generator.state
+            # hops and components as a plain search on the run's own graph finds them
+            hops = shortest_path(batch[b].adjacency, unweighted=True, indices=n_robots)[:n_robots]
+            np.testing.assert_array_equal(batch[b].source_hops, np.where(np.isfinite(hops), hops, -1))
+            _, labels = connected_components(batch[b].adjacency, directed=False)
+            np.testing.assert_array_equal(batch[b].component, labels)
 
 
 def test_nets_of_different_configurations_are_not_updated_together() -> None:
