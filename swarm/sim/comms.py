@@ -41,6 +41,12 @@ linked to its neighbourhood, so the graph's components and hops are those of the
 Determinism: pairs are kept sorted by key ``i * N + j`` (``i < j``) and the Gaussian draws are
 taken in that order, one per new or moved pair, so the same inputs and seed give the same `Links`.
 
+Batches: `update_nets` updates the nets of several runs of one configuration (a batched world's
+runs) together: the geometry and link budgets as arrays over all their pairs, the components and
+hops as one graph search on the block-diagonal graph of all the runs. Each run still draws its
+shadowing from its own generator, in its own key order, so each gets the `Links` it would alone
+(`RadioNet.update` is `update_nets` with one net).
+
 Disjoint paths (Menger's theorem, e.g. Diestel, *Graph Theory*, 5th ed., 2017, section 3.3): the
 number of internally node-disjoint a-b paths equals the fewest nodes whose removal separates a
 from b; it is found as a maximum flow after splitting every node into an in- and an out-node
@@ -50,7 +56,9 @@ joined by an arc of capacity 1 (node splitting: Ahuja, Magnanti, Orlin, *Network
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -68,18 +76,40 @@ NEIGHBOUR_TABLE = 32
 #: Pairs closer than this are evaluated at this distance (path loss needs d > 0), metres.
 MIN_DISTANCE_M = 1e-3
 
+#: Up to this many robots the candidate pairs of all the runs of a batch are found at once on dense
+#: (runs, N, N) distances; beyond it, or where the neighbour tables apply, run by run with k-d trees.
+DENSE_ROBOTS = 64
+
 _RR, _RF, _FF = 0, 1, 2  # pair classes: robot-robot, robot-fixed, fixed-fixed
 
 
-@dataclass
+@dataclass(eq=False)
 class Links:
-    """The radio graph at one step. Nodes: robots ``0..n-1``, then the fixed nodes (source, sinks)."""
+    """The radio graph at one step. Nodes: robots ``0..n-1``, then the fixed nodes (source, sinks).
 
-    adjacency: scipy.sparse.csr_matrix  # (N, N) bool, symmetric
-    margin_db: scipy.sparse.csr_matrix  # (N, N) float, same pattern: P_rx - X - sensitivity, dB
+    The working links are held as the CSR arrays of the symmetric margin matrix; `adjacency` and
+    `margin_db` are built from them when first asked for (a batch's steps mostly need neither)."""
+
+    indptr: np.ndarray  # (N + 1,) int32 CSR row pointers of the working links, both directions
+    indices: np.ndarray  # int32 the other end of each, ascending within a row
+    margins: np.ndarray  # P_rx - X - sensitivity of each, dB (>= 0)
     degree: np.ndarray  # (n,) working links of each robot (to robots and fixed nodes)
     component: np.ndarray  # (N,) connected-component label
     source_hops: np.ndarray  # (n,) hops from the source to each robot; -1 unreachable or no source
+
+    @functools.cached_property
+    def margin_db(self) -> scipy.sparse.csr_matrix:
+        """(N, N) float: P_rx - X - sensitivity of the working links, dB; symmetric."""
+        return self._matrix(self.margins.copy())
+
+    @functools.cached_property
+    def adjacency(self) -> scipy.sparse.csr_matrix:
+        """(N, N) bool: the working links; symmetric."""
+        return self._matrix(np.ones(len(self.indices), dtype=bool))
+
+    def _matrix(self, data: np.ndarray) -> scipy.sparse.csr_matrix:
+        big_n = self.n_nodes
+        return scipy.sparse.csr_matrix((data, self.indices.copy(), self.indptr.copy()), shape=(big_n, big_n))
 
     @property
     def n_robots(self) -> int:
@@ -87,7 +117,7 @@ class Links:
 
     @property
     def n_nodes(self) -> int:
-        return self.adjacency.shape[0]
+        return len(self.indptr) - 1
 
     def connected(self, a: int, b: int) -> bool:
         """Can nodes a and b reach each other over working links (any number of hops)?"""
@@ -98,7 +128,7 @@ class Links:
 
         A direct a-b link counts as one path. Every other node, fixed or robot, can carry at most
         one path (module docstring: node splitting and maximum flow)."""
-        return _node_connectivity(self.adjacency, a, [b], limit)[0]
+        return _node_connectivity(self.indptr, self.indices, a, [b], limit)[0]
 
     def fixed_linked(self, redundancy: int = 1) -> bool:
         """Does the source reach every sink with at least `redundancy` node-disjoint paths?
@@ -118,24 +148,26 @@ class Links:
             return True
         fixed = np.zeros(big_n, dtype=bool)
         fixed[n:] = True
-        return min(_node_connectivity(self.adjacency, n, sinks, redundancy, uncuttable=fixed)) >= redundancy
+        counts = _node_connectivity(self.indptr, self.indices, n, sinks, redundancy, uncuttable=fixed)
+        return min(counts) >= redundancy
 
 
 def _node_connectivity(
-    adjacency: scipy.sparse.csr_matrix,
+    indptr: np.ndarray,
+    indices: np.ndarray,
     a: int,
     targets: list[int],
     limit: int,
     uncuttable: np.ndarray | None = None,
 ) -> list[int]:
     """For each b in `targets`: min(limit, internally node-disjoint a-b paths), by maximum flow on
-    the split graph.
+    the split graph of the links in CSR form (`indptr`, `indices`, both directions).
 
     In-node v, out-node v + N; arc v -> v + N has capacity 1 (``limit`` for a, b and `uncuttable`
     nodes); each link u-v gives arcs u + N -> v and v + N -> u of capacity 1 (``limit`` between two
     uncuttable nodes, which no robot loss can break). A super-source 2N feeds a + N through an arc
     of capacity ``limit``, so the flow, and with it Dinic's work, stops at ``limit``."""
-    big_n = adjacency.shape[0]
+    big_n = len(indptr) - 1
     for node in (a, *targets):
         if not 0 <= node < big_n:
             raise IndexError(f"comms: nodes must be in 0..{big_n - 1}, found {node}")
@@ -145,17 +177,16 @@ def _node_connectivity(
     out: dict[int, int] = {}
     # a quick lower bound first: the direct link and each common neighbour w (path a-w-b) are
     # node-disjoint paths; in a dense swarm they settle it without a flow computation
-    ptr, idx = adjacency.indptr, adjacency.indices
-    near_a = set(idx[ptr[a] : ptr[a + 1]].tolist())
+    near_a = set(indices[indptr[a] : indptr[a + 1]].tolist())
     for b in targets:
-        near_b = idx[ptr[b] : ptr[b + 1]].tolist()
+        near_b = indices[indptr[b] : indptr[b + 1]].tolist()
         if a == b or (b in near_a) + len(near_a.intersection(near_b)) >= limit:
             out[b] = limit
     rest = [b for b in targets if b not in out]
     if not rest:
         return [out[b] for b in targets]
-    coo = adjacency.tocoo()
-    u, v = coo.row.astype(np.int32), coo.col.astype(np.int32)
+    u = np.repeat(np.arange(big_n, dtype=np.int32), np.diff(indptr))
+    v = indices.astype(np.int32)
     if uncuttable is None:
         arc_cap = np.ones(len(u), dtype=np.int32)
     else:
@@ -174,8 +205,16 @@ def _node_connectivity(
     return [out[b] for b in targets]
 
 
+@functools.lru_cache(maxsize=64)
+def _shared(config: tuple) -> tuple:
+    """The first of equal configurations, so that the nets of a batch compare theirs by identity."""
+    return config
+
+
+@functools.lru_cache(maxsize=64)
 def _candidate_range_m(radio: RadioParams, sigmas: float) -> float:
-    """Largest distance at which P_rx(d) + sigmas * sigma >= sensitivity; 0 if not even at 1 mm."""
+    """Largest distance at which P_rx(d) + sigmas * sigma >= sensitivity; 0 if not even at 1 mm.
+    Cached: every run of a study builds its nets with the same radios."""
     try:
         return comm_range_m(dataclasses.replace(radio, fade_margin_db=-sigmas * radio.shadowing_sigma_db))
     except SwarmError:
@@ -221,6 +260,8 @@ class RadioNet:
             dataclasses.replace(radio, tx_height_m=fixed_height_m, rx_height_m=fixed_height_m),
         )
         self.candidate_range_m = tuple(_candidate_range_m(r, CANDIDATE_SIGMAS) for r in self._radios)
+        # what nets updated together must share (`update_nets`); equal ones are one object
+        self._config = _shared((self._radios, self.n, fixed.tobytes(), self.decorrelation_m, neighbour_table))
         # per-pair state, sorted by key i * N + j (i < j)
         self._keys = np.empty(0, dtype=np.int64)
         self._shadow_db = np.empty(0)
@@ -232,6 +273,9 @@ class RadioNet:
         dff = np.linalg.norm(fixed[fi] - fixed[fj], axis=1) if self.f else np.empty(0)
         keep = dff <= self.candidate_range_m[_FF]
         self._ff_keys = (fi[keep] + self.n).astype(np.int64) * self.n_nodes + (fj[keep] + self.n)
+        self._ff_mask = np.zeros((self.f, self.f), dtype=bool)
+        self._ff_mask[fi[keep], fj[keep]] = True
+        self._upper = np.triu(np.ones((self.n, self.n), dtype=bool), k=1) if self.n <= DENSE_ROBOTS else None
 
     def reset(self) -> None:
         """Forget all shadowing state (a new episode)."""
@@ -239,8 +283,68 @@ class RadioNet:
         self._shadow_db = np.empty(0)
         self._last_xy[: self.n] = np.nan
 
+    def update(self, xy: np.ndarray, up: np.ndarray, rng: np.random.Generator) -> Links:
+        """Advance the shadowing to the robots' new positions `xy` (n, 2) and return the working
+        links; `up` (n,) marks robots whose radio is on."""
+        n = self.n
+        xy = np.asarray(xy, dtype=np.float64).reshape(-1, 2)
+        up = np.asarray(up, dtype=bool).reshape(-1)
+        if len(xy) != n or len(up) != n:
+            raise ValueError(f"comms: expected xy ({n}, 2) and up ({n},), found {xy.shape}, {up.shape}")
+        return update_nets([self], xy[None], up[None], [rng])[0]
+
+    # candidate pairs ----------------------------------------------------------------------------------
+    def _candidate_keys(self, pos: np.ndarray, finite: np.ndarray) -> np.ndarray:
+        """Keys ``b * N^2 + i * N + j`` (i < j) of the candidate pairs of runs ``b = 0..k-1`` at
+        positions `pos` (k, N, 2), sorted; `finite` (k, N) marks the nodes with a position."""
+        k, big_n = len(pos), self.n_nodes
+        nn = big_n * big_n
+        table = self.neighbour_table
+        dense = np.full(k, self.n <= DENSE_ROBOTS)
+        if table is not None and self.n > table + 1:
+            dense &= np.count_nonzero(finite[:, : self.n], axis=1) <= table + 1
+        parts = []
+        if dense.all():
+            parts.append(np.flatnonzero(self._dense_candidates(pos, finite)))
+        elif dense.any():
+            runs = np.flatnonzero(dense)
+            run, key = np.divmod(np.flatnonzero(self._dense_candidates(pos[runs], finite[runs])), nn)
+            parts.append(runs[run] * nn + key)
+        for b in np.flatnonzero(~dense).tolist():
+            parts.append(self._candidates(pos[b], finite[b]) + b * nn)
+        return parts[0] if len(parts) == 1 else np.sort(np.concatenate(parts))
+
+    def _dense_candidates(self, pos: np.ndarray, finite: np.ndarray) -> np.ndarray:
+        """(k, N, N) bool, upper triangle: the candidate pairs of k runs whose robots are all in
+        each other's neighbour tables. The same rule as `_candidates`, with the same arithmetic
+        (squared distances against the squared range, as the k-d tree's pair query)."""
+        n, big_n, k = self.n, self.n_nodes, len(pos)
+        mask = np.zeros((k, big_n, big_n), dtype=bool)
+        live = finite[:, :n]
+        r_rr, r_rf = self.candidate_range_m[_RR], self.candidate_range_m[_RF]
+        with np.errstate(invalid="ignore"):
+            if n >= 2 and r_rr > 0:
+                x, y = pos[:, :n, 0], pos[:, :n, 1]
+                pairs = live[:, :, None] & live[:, None, :] & self._upper
+                dx, dy = x[:, :, None] - x[:, None, :], y[:, :, None] - y[:, None, :]
+                near = dx * dx + dy * dy <= r_rr * r_rr
+                near &= pairs
+                if not np.array_equal(near, pairs):
+                    # a compact swarm (bounding box diagonal within range) has every pair in range
+                    span_x = np.where(live, x, -np.inf).max(axis=1) - np.where(live, x, np.inf).min(axis=1)
+                    span_y = np.where(live, y, -np.inf).max(axis=1) - np.where(live, y, np.inf).min(axis=1)
+                    near |= pairs & (np.hypot(span_x, span_y) <= r_rr)[:, None, None]
+                mask[:, :n, :n] = near
+            if self.f and r_rf > 0:
+                # sqrt(dx^2 + dy^2), as `np.linalg.norm` computes it in `_candidates`
+                dx = pos[:, :n, 0, None] - self.fixed_m[:, 0]
+                dy = pos[:, :n, 1, None] - self.fixed_m[:, 1]
+                mask[:, :n, n:] = (np.sqrt(dx * dx + dy * dy) <= r_rf) & live[:, :, None]
+        mask[:, n:, n:] = self._ff_mask
+        return mask
+
     def _candidates(self, pos: np.ndarray, finite: np.ndarray) -> np.ndarray:
-        """Keys ``i * N + j`` (i < j) of the candidate pairs, sorted."""
+        """Keys ``i * N + j`` (i < j) of the candidate pairs of one run, sorted."""
         n, big_n = self.n, self.n_nodes
         live = np.flatnonzero(finite[:n])
         r_rr = self.candidate_range_m[_RR]
@@ -248,13 +352,14 @@ class RadioNet:
         table = self.neighbour_table
         if len(live) >= 2 and r_rr > 0 and table is not None and len(live) > table + 1:
             # each robot's `table` nearest robots within range; a pair if either end lists the other
-            dist, nb = cKDTree(pos[live]).query(pos[live], k=table + 1, distance_upper_bound=r_rr)
+            _, nb = cKDTree(pos[live]).query(pos[live], k=table + 1, distance_upper_bound=r_rr)
             a = np.repeat(np.arange(len(live)), table + 1)
             b = nb.ravel()
-            ok = np.isfinite(dist.ravel()) & (a != b)  # itself (or a twin at the same spot) is not a pair
+            # missing neighbours are index len(live); itself (or a twin at the same spot) is not a pair
+            ok = (b < len(live)) & (a != b)
             a, b = a[ok], b[ok]
             lo_, hi_ = np.minimum(a, b), np.maximum(a, b)
-            keys = np.unique(live[lo_].astype(np.int64) * big_n + live[hi_])
+            keys = _sorted_unique(live[lo_].astype(np.int64) * big_n + live[hi_])
         elif len(live) >= 2 and r_rr > 0:
             lo, hi = pos[live].min(axis=0), pos[live].max(axis=0)
             if float(np.hypot(*(hi - lo))) <= r_rr:
@@ -275,58 +380,11 @@ class RadioNet:
         # fixed-fixed keys (i >= n) come after all the others
         return np.concatenate([keys, self._ff_keys])
 
-    def update(self, xy: np.ndarray, up: np.ndarray, rng: np.random.Generator) -> Links:
-        """Advance the shadowing to the robots' new positions `xy` (n, 2) and return the working
-        links; `up` (n,) marks robots whose radio is on."""
-        n, big_n = self.n, self.n_nodes
-        xy = np.asarray(xy, dtype=np.float64).reshape(-1, 2)
-        up = np.asarray(up, dtype=bool).reshape(-1)
-        if len(xy) != n or len(up) != n:
-            raise ValueError(f"comms: expected xy ({n}, 2) and up ({n},), found {xy.shape}, {up.shape}")
-        pos = np.vstack([xy, self.fixed_m])
-        finite = np.all(np.isfinite(pos), axis=1)
-        on = np.concatenate([up, np.ones(self.f, dtype=bool)]) & finite
-
-        keys = self._candidates(pos, finite)
-        i = keys // big_n
-        j = keys - i * big_n
-
-        # match with last step's pairs (all of them, when the candidate set did not change)
-        if np.array_equal(keys, self._keys):
-            old = np.ones(len(keys), dtype=bool)
-            prev = self._shadow_db
-        elif len(self._keys):
-            where = np.minimum(np.searchsorted(self._keys, keys), len(self._keys) - 1)
-            old = self._keys[where] == keys
-            prev = np.where(old, self._shadow_db[where], 0.0)
-        else:
-            old = np.zeros(len(keys), dtype=bool)
-            prev = np.zeros(len(keys))
-        with np.errstate(invalid="ignore"):
-            step = np.sqrt(np.sum((pos - self._last_xy) ** 2, axis=1))
-        step[~np.isfinite(step)] = np.inf
-        moved_m = np.maximum(step[i], step[j])
-
-        # shadowing: X_new = rho X_old + sqrt(1 - rho^2) sigma Z; rho = 1 (X kept, no draw) for a pair
-        # that did not move, 0 (a fresh draw) for a new pair
-        if self.sigma_db > 0:
-            rho = np.exp(moved_m / -self.decorrelation_m)
-            rho[~old] = 0.0
-            fresh = rho < 1.0
-            n_fresh = int(np.count_nonzero(fresh))
-            if n_fresh == len(keys):
-                z = rng.standard_normal(n_fresh)
-            else:
-                z = np.zeros(len(keys))
-                z[fresh] = rng.standard_normal(n_fresh)
-            shadow = rho * prev + np.sqrt(1.0 - rho * rho) * (self.sigma_db * z)
-        else:
-            shadow = np.zeros(len(keys))
-
-        # mean received power, with the antenna heights of each pair class
-        px, py = np.ascontiguousarray(pos[:, 0]), np.ascontiguousarray(pos[:, 1])
-        dx, dy = px[i] - px[j], py[i] - py[j]
-        d = np.maximum(np.sqrt(dx * dx + dy * dy), MIN_DISTANCE_M)
+    # the link budget ----------------------------------------------------------------------------------
+    def _received_dbm(self, d: np.ndarray, i: np.ndarray, j: np.ndarray) -> np.ndarray:
+        """Mean received power over pairs at distances `d` between nodes `i` < `j` (local ids),
+        with the antenna heights of each pair's class."""
+        n = self.n
         prx = received_power_dbm(d, self._radios[_RR])
         for c in (_RF, _FF):
             sel = np.flatnonzero(j >= n) if c == _RF else np.flatnonzero(i >= n)
@@ -334,39 +392,195 @@ class RadioNet:
                 sel = sel[i[sel] < n]
             if len(sel):
                 prx[sel] = received_power_dbm(d[sel], self._radios[c])
+        return prx
 
-        self._keys, self._shadow_db = keys, shadow
-        self._last_xy[finite] = pos[finite]
 
-        margin = prx - shadow - self.radio.sensitivity_dbm
-        works = (margin >= 0.0) & on[i] & on[j]
-        return self._links(i[works], j[works], margin[works])
+def _sorted_unique(keys: np.ndarray) -> np.ndarray:
+    """`np.unique` of int keys by sorting (several times faster than its hash table here)."""
+    keys = np.sort(keys)
+    return keys[np.concatenate(([True], keys[1:] != keys[:-1]))] if len(keys) else keys
 
-    def _links(self, i: np.ndarray, j: np.ndarray, margin: np.ndarray) -> Links:
-        n, big_n = self.n, self.n_nodes
-        i32, j32 = i.astype(np.int32), j.astype(np.int32)
-        # lower triangle first: with the keys sorted, the stable row sort of the COO -> CSR conversion
-        # leaves every row's columns ascending, so scipy need not sort them
-        margin_db = scipy.sparse.csr_matrix(
-            (np.concatenate([margin, margin]), (np.concatenate([j32, i32]), np.concatenate([i32, j32]))),
-            shape=(big_n, big_n),
-        )
-        indices, indptr = margin_db.indices, margin_db.indptr
-        adjacency = scipy.sparse.csr_matrix(
-            (np.ones(len(indices), dtype=bool), indices.copy(), indptr.copy()), shape=(big_n, big_n)
-        )
-        degree = np.diff(indptr)[:n].astype(np.intp)
-        # csgraph works on float weights: hand it one (unit weights) rather than have it convert the
-        # bool matrix twice; the matrix is symmetric, so "directed" saves a transpose, same answer
-        graph = scipy.sparse.csr_matrix((np.ones(len(indices)), indices, indptr), shape=(big_n, big_n))
-        _, component = connected_components(graph, directed=True, connection="strong")
-        source_hops = np.full(n, -1, dtype=np.intp)
-        if self.f:
-            order, pred = breadth_first_order(graph, n, directed=True, return_predecessors=True)
-            hops = [-1] * big_n
-            hops[n] = 0
-            parent = pred.tolist()
-            for v in order[1:].tolist():  # BFS order: a node's parent comes before it
-                hops[v] = hops[parent[v]] + 1
-            source_hops[:] = hops[:n]
-        return Links(adjacency, margin_db, degree, component, source_hops)
+
+def update_nets(
+    nets: Sequence[RadioNet], xy: np.ndarray, up: np.ndarray, rngs: Sequence[np.random.Generator]
+) -> list[Links]:
+    """`RadioNet.update` of k nets of one configuration at once (the runs of a batch): robots at
+    `xy` (k, n, 2), radios `up` (k, n), each net drawing from its own generator in `rngs`.
+
+    Every net takes its draws in its own key order, as alone, so each gets the `Links` it would
+    get from its own `update` (module docstring: batches)."""
+    if not nets:
+        return []
+    net = nets[0]
+    k, n, big_n = len(nets), net.n, net.n_nodes
+    if any(other._config is not net._config and other._config != net._config for other in nets[1:]):
+        raise ValueError("comms: nets updated together must share radio, robots and fixed nodes")
+    xy = np.asarray(xy, dtype=np.float64)
+    up = np.asarray(up, dtype=bool)
+    if xy.shape != (k, n, 2) or up.shape != (k, n) or len(rngs) != k:
+        raise ValueError(f"comms: expected xy ({k}, {n}, 2), up ({k}, {n}) and {k} generators")
+    pos = np.empty((k, big_n, 2))
+    pos[:, :n] = xy
+    pos[:, n:] = net.fixed_m
+    finite = np.isfinite(pos).all(axis=2)
+    on = finite.copy()
+    on[:, :n] &= up
+
+    keys = net._candidate_keys(pos, finite)  # b * N^2 + i * N + j
+    node_i = keys // big_n  # b * N + i
+    run = node_i // big_n
+    i = node_i - run * big_n
+    j = keys - node_i * big_n
+    node_j = node_i + (j - i)
+    old, prev = _previous_shadowing(nets, keys)
+    last = np.stack([m._last_xy for m in nets])
+    with np.errstate(invalid="ignore"):
+        step = np.sqrt(np.sum((pos - last) ** 2, axis=2)).ravel()
+    step[~np.isfinite(step)] = np.inf
+    shadow = _shadowing(net, old, prev, np.maximum(step[node_i], step[node_j]), run, rngs)
+
+    px, py = pos[:, :, 0].ravel(), pos[:, :, 1].ravel()
+    dx, dy = px[node_i] - px[node_j], py[node_i] - py[node_j]
+    d = np.maximum(np.sqrt(dx * dx + dy * dy), MIN_DISTANCE_M)
+    margin = net._received_dbm(d, i, j) - shadow - net.radio.sensitivity_dbm
+    on = on.ravel()
+    works = (margin >= 0.0) & on[node_i] & on[node_j]
+
+    # hand each net its state back: its slice of the pairs (local keys), its positions
+    ends = np.searchsorted(keys, np.arange(1, k) * (big_n * big_n)).tolist()
+    local = keys - run * (big_n * big_n)
+    last[finite] = pos[finite]
+    for m, lo, hi, last_b in zip(nets, [0, *ends], [*ends, len(keys)], last, strict=True):
+        m._keys, m._shadow_db, m._last_xy = local[lo:hi], shadow[lo:hi], last_b
+    return _links(net, k, node_i[works], node_j[works], margin[works])
+
+
+def _previous_shadowing(nets: Sequence[RadioNet], keys: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Which of the pairs `keys` (batch keys) each net already had, and their shadowing then (0
+    for new pairs)."""
+    big_n = nets[0].n_nodes
+    if len(nets) == 1:
+        old_keys, old_shadow = nets[0]._keys, nets[0]._shadow_db
+    else:
+        nn = big_n * big_n
+        old_keys = np.concatenate([m._keys + b * nn for b, m in enumerate(nets)])
+        old_shadow = np.concatenate([m._shadow_db for m in nets])
+    # all of them, when the candidate set did not change
+    if np.array_equal(keys, old_keys):
+        return np.ones(len(keys), dtype=bool), old_shadow
+    if not len(old_keys):
+        return np.zeros(len(keys), dtype=bool), np.zeros(len(keys))
+    where = np.minimum(np.searchsorted(old_keys, keys), len(old_keys) - 1)
+    old = old_keys[where] == keys
+    return old, np.where(old, old_shadow[where], 0.0)
+
+
+def _shadowing(
+    net: RadioNet,
+    old: np.ndarray,
+    prev: np.ndarray,
+    moved_m: np.ndarray,
+    run: np.ndarray,
+    rngs: Sequence[np.random.Generator],
+) -> np.ndarray:
+    """X_new = rho X_old + sqrt(1 - rho^2) sigma Z over the pairs of all runs; rho = 1 (X kept, no
+    draw) for a pair that did not move, 0 (a fresh draw) for a new pair. Run b's draws come from
+    ``rngs[b]``, in its pairs' order."""
+    if net.sigma_db <= 0:
+        return np.zeros(len(old))
+    rho = np.exp(moved_m / -net.decorrelation_m)
+    rho[~old] = 0.0
+    fresh = rho < 1.0
+    z = np.zeros(len(old))
+    counts = np.bincount(run[fresh], minlength=len(rngs)).tolist()
+    draws = [rng.standard_normal(c) for rng, c in zip(rngs, counts, strict=True) if c]
+    if draws:
+        z[fresh] = draws[0] if len(draws) == 1 else np.concatenate(draws)
+    return rho * prev + np.sqrt(1.0 - rho * rho) * (net.sigma_db * z)
+
+
+def _links(net: RadioNet, k: int, u: np.ndarray, v: np.ndarray, margin: np.ndarray) -> list[Links]:
+    """Each run's `Links` from the working pairs u < v (batch node ids ``b * N + i``, in key order)
+    of k runs: one CSR of the block-diagonal graph of all the runs, one component search and one
+    breadth-first search from all the sources on it."""
+    n, big_n = net.n, net.n_nodes
+    nodes = k * big_n
+    # lower triangle first: with the pairs in key order, a stable sort by row leaves every row's
+    # columns ascending (CSR order)
+    rows = np.concatenate([v, u]).astype(np.int32)
+    cols = np.concatenate([u, v]).astype(np.int32)
+    order = np.argsort(rows, kind="stable")
+    indices, margins = cols[order], np.concatenate([margin, margin])[order]
+    counts = np.bincount(rows, minlength=nodes)
+    indptr = np.zeros(nodes + 1, dtype=np.int32)
+    np.cumsum(counts, out=indptr[1:])
+    graph = _search_graph(indptr, indices, k, n, big_n)
+    component = _components(graph, k, big_n)
+    hops = _source_hops(graph, k, n, big_n)
+    degree = counts.reshape(k, big_n)[:, :n].astype(np.intp)
+    # each run's CSR in its own node ids: a link never leaves its run
+    ends = indptr[np.arange(k + 1) * big_n]
+    ptr = np.empty((k, big_n + 1), dtype=np.int32)
+    ptr[:, :big_n] = indptr[:-1].reshape(k, big_n)
+    ptr[:, big_n] = ends[1:]
+    ptr -= ends[:-1, None]
+    local = indices % np.int32(max(big_n, 1))
+    ends = ends.tolist()
+    return [
+        Links(ptr[b], local[lo:hi], margins[lo:hi], degree[b], component[b], hops[b])
+        for b, lo, hi in zip(range(k), ends[:-1], ends[1:], strict=True)
+    ]
+
+
+def _search_graph(
+    indptr: np.ndarray, indices: np.ndarray, k: int, n: int, big_n: int
+) -> scipy.sparse.csr_matrix:
+    """The block-diagonal graph of the k runs' links, with unit weights (csgraph works on floats:
+    hand it them rather than have it convert a bool matrix). When the runs have a source, one more
+    node after them has an arc to every run's source: the hop search starts there; with no arc
+    into it, it is a component of its own, numbered after all the others."""
+    nodes = k * big_n
+    if big_n > n:
+        indptr = np.append(indptr, indptr[-1] + k).astype(np.int32)
+        indices = np.concatenate([indices, np.arange(k, dtype=np.int32) * big_n + n])
+        nodes += 1
+    return scipy.sparse.csr_matrix((np.ones(len(indices)), indices, indptr), shape=(nodes, nodes))
+
+
+def _components(graph: scipy.sparse.csr_matrix, k: int, big_n: int) -> np.ndarray:
+    """(k, N) connected-component labels of each run's graph, numbered within the run as a search
+    on that run alone numbers them: the search visits the block-diagonal graph's runs one after
+    another, so run b's labels are its own shifted by the components of the runs before it."""
+    # the matrix is symmetric, so "directed" saves a transpose, same answer
+    _, labels = connected_components(graph, directed=True, connection="strong")
+    labels = labels[: k * big_n].reshape(k, big_n)
+    return labels - labels.min(axis=1, keepdims=True) if big_n else labels
+
+
+def _source_hops(graph: scipy.sparse.csr_matrix, k: int, n: int, big_n: int) -> np.ndarray:
+    """(k, n) hops from each run's source (node n) to its robots, -1 when unreachable or there is
+    no source: one breadth-first search from the node linked to all the sources (`_search_graph`;
+    no run reaches another's nodes)."""
+    if big_n == n:
+        return np.full((k, n), -1, dtype=np.intp)
+    root = k * big_n
+    order, parent = breadth_first_order(graph, root, directed=True, return_predecessors=True)
+    depth = _depths(order, parent)
+    return np.maximum(depth[:root] - 1, -1).reshape(k, big_n)[:, :n]
+
+
+def _depths(order: np.ndarray, parent: np.ndarray) -> np.ndarray:
+    """Depth of every node in a breadth-first search tree from ``order[0]`` (-1: not reached).
+
+    The search visits the nodes level by level, each node's parent comes before it in `order` and
+    the parents' places never decrease along it: each level is the stretch of `order` whose parents
+    lie in the level before, found with one binary search."""
+    place = np.empty(len(parent), dtype=np.intp)
+    place[order] = np.arange(len(order))
+    parent_place = place[parent[order[1:]]]
+    depth = np.full(len(parent), -1, dtype=np.intp)
+    lo, hi, level = 0, 1, 0
+    while lo < hi:
+        depth[order[lo:hi]] = level
+        lo, hi, level = hi, 1 + int(np.searchsorted(parent_place, hi)), level + 1
+    return depth

@@ -541,19 +541,27 @@ class World:
                     run.log_event("mark", i, object=obj, mine=int(run.object_mine[obj]))
 
     def _update_comms(self, live: list[int]) -> None:
+        """Update the radio graphs of the live runs whose radio period is up, all in one batch
+        (`comms.update_nets`: each run still draws from its own generator), then log relay
+        changes."""
         s = self.setup
         cutoff = s.mission.hazards.comms.cutoff_s
-        for b in live:
-            run = self.runs[b]
-            t = float(self.t_s[b])
-            if t + 1e-9 < run.next_comms_s:
-                continue
-            run.next_comms_s = t + self.comms_period_s
-            jammed = cutoff is not None and t >= cutoff
-            up = self.alive[b] & self.on_map[b] & self.radio_ok[b] & (not jammed)
-            run.links = run.radio_net.update(self.robot_state[b, :, :2], up, run.rngs["radio"])
-            self.link_degree[b] = run.links.degree
-            self.source_hops[b] = run.links.source_hops
+        due = [b for b in live if float(self.t_s[b]) + 1e-9 >= self.runs[b].next_comms_s]
+        if not due:
+            return
+        t = self.t_s[due]
+        up = self.alive[due] & self.on_map[due] & self.radio_ok[due]
+        if cutoff is not None:
+            up &= (t < cutoff)[:, None]
+        runs = [self.runs[b] for b in due]
+        nets = [run.radio_net for run in runs]
+        xy = self.robot_state[due, :, :2]
+        links = comms.update_nets(nets, xy, up, [run.rngs["radio"] for run in runs])
+        self.link_degree[due] = [x.degree for x in links]
+        self.source_hops[due] = [x.source_hops for x in links]
+        for b, run, run_links in zip(due, runs, links, strict=True):
+            run.next_comms_s = float(self.t_s[b]) + self.comms_period_s
+            run.links = run_links
             run.links_version += 1
             if s.relay_task is not None:
                 now = bool(run.links.fixed_linked(s.relay_task.redundancy))

@@ -14,11 +14,11 @@ import math
 
 import numpy as np
 import pytest
-from scipy.sparse.csgraph import connected_components
+from scipy.sparse.csgraph import connected_components, shortest_path
 from scipy.stats import norm
 
 from swarm.planning.radio import RadioParams, comm_range_m, outage_probability, received_power_dbm
-from swarm.sim.comms import RadioNet
+from swarm.sim.comms import RadioNet, update_nets
 
 #: Low power so ranges are tens of metres: R0 (sigma 0, no fade margin) about 36 m, two-ray regime.
 RADIO = RadioParams(tx_power_dbm=-30.0, sensitivity_dbm=-100.0, shadowing_sigma_db=6.0)
@@ -382,3 +382,54 @@ def test_a_dense_swarm_links_through_bounded_neighbour_tables() -> None:
     full = RadioNet(QUIET, 300, neighbour_table=None).update(xy, np.ones(300, bool), rng)
     assert full.adjacency.nnz // 2 == 300 * 299 // 2  # without tables: every pair
     assert len(np.unique(links.component)) == 1
+
+
+# batches ------------------------------------------------------------------------------------------
+
+
+def _assert_same_links(a, b) -> None:
+    for name in ("margin_db", "adjacency"):
+        x, y = getattr(a, name), getattr(b, name)
+        np.testing.assert_array_equal(x.indptr, y.indptr)
+        np.testing.assert_array_equal(x.indices, y.indices)
+        np.testing.assert_array_equal(x.data, y.data)
+    for name in ("degree", "component", "source_hops"):
+        np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
+
+
+@pytest.mark.parametrize("n_robots", [12, 40])  # 40 > table + 1: some runs use the neighbour tables
+def test_a_batch_of_nets_gives_each_run_the_links_it_gets_alone(n_robots: int) -> None:
+    """Runs updated together (`update_nets`) draw from their own generators in their own order:
+    each run's links, hops, components and generator state are those of updating it alone."""
+    rng = np.random.default_rng(3)
+    r0 = _r0(RADIO)
+    fixed = np.array([[0.0, 0.0], [3 * r0, 0.0], [0.0, 3 * r0]])
+    k = 4
+    alone = [RadioNet(RADIO, n_robots, fixed, neighbour_table=8) for _ in range(k)]
+    together = [RadioNet(RADIO, n_robots, fixed, neighbour_table=8) for _ in range(k)]
+    rngs_alone = [np.random.default_rng(s) for s in range(k)]
+    rngs_together = [np.random.default_rng(s) for s in range(k)]
+    xy = rng.uniform(0, 3 * r0, size=(k, n_robots, 2))
+    for _ in range(5):
+        xy += rng.normal(0.0, 3.0, size=xy.shape) * (rng.random((k, n_robots, 1)) < 0.5)
+        pos = xy.copy()
+        pos[rng.random((k, n_robots)) < 0.1] = np.nan
+        pos[1, 9:] = np.nan  # run 1 keeps few robots: all pairs, while the others use tables
+        up = rng.random((k, n_robots)) < 0.8
+        one = [net.update(pos[b], up[b], rngs_alone[b]) for b, net in enumerate(alone)]
+        batch = update_nets(together, pos, up, rngs_together)
+        for b in range(k):
+            _assert_same_links(one[b], batch[b])
+            assert one[b].fixed_linked(2) == batch[b].fixed_linked(2)
+            assert rngs_alone[b].bit_generator.state == rngs_together[b].bit_generator.state
+            # hops and components as a plain search on the run's own graph finds them
+            hops = shortest_path(batch[b].adjacency, unweighted=True, indices=n_robots)[:n_robots]
+            np.testing.assert_array_equal(batch[b].source_hops, np.where(np.isfinite(hops), hops, -1))
+            _, labels = connected_components(batch[b].adjacency, directed=False)
+            np.testing.assert_array_equal(batch[b].component, labels)
+
+
+def test_nets_of_different_configurations_are_not_updated_together() -> None:
+    nets = [RadioNet(RADIO, 3), RadioNet(QUIET, 3)]
+    with pytest.raises(ValueError):
+        update_nets(nets, np.zeros((2, 3, 2)), np.ones((2, 3), bool), [np.random.default_rng(0)] * 2)
