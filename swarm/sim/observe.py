@@ -169,7 +169,7 @@ class Observer:
             table[live, : q - 1] = live[idx[:, 1:]]  # the first is itself
         self._tables[b] = table
         keys = self._link_keys(run, nb)
-        query = np.repeat(np.arange(self.n), k).astype(np.int64) * run.links.adjacency.shape[0]
+        query = np.repeat(np.arange(self.n), k).astype(np.int64) * run.links.n_nodes
         query += np.maximum(table, 0).ravel()
         at = np.minimum(np.searchsorted(keys, query), max(len(keys) - 1, 0))
         hit = keys[at] == query if len(keys) else np.zeros(len(query), bool)
@@ -246,11 +246,12 @@ class Observer:
 
     @staticmethod
     def _link_keys(run, nb: _Neighbours) -> np.ndarray:
-        """Working links as sorted keys row * N + col (both directions), once per radio update."""
+        """Working links as sorted keys row * N + col (both directions), once per radio update
+        (the links' CSR columns ascend within each row)."""
         if nb.keys_version != run.links_version:
-            adj = run.links.adjacency.tocsr()
-            adj.sort_indices()
-            rows = np.repeat(np.arange(adj.shape[0], dtype=np.int64), np.diff(adj.indptr))
-            nb.keys = rows * adj.shape[0] + adj.indices
+            links = run.links
+            big_n = links.n_nodes
+            rows = np.repeat(np.arange(big_n, dtype=np.int64), np.diff(links.indptr))
+            nb.keys = rows * big_n + links.indices
             nb.keys_version = run.links_version
         return nb.keys
