@@ -410,11 +410,9 @@ class HazardModel:
         size = n * len(runs)
         self._check(inp, size)
         # fixed shape per run: see "Determinism" above
-        u = (
-            gens[0].random((n, N_UNIFORMS))
-            if len(gens) == 1
-            else np.concatenate([g.random((n, N_UNIFORMS)) for g in gens])
-        )
+        u = np.empty((size, N_UNIFORMS))
+        for k, g in enumerate(gens):
+            g.random(out=u[k * n : (k + 1) * n])
         if not self.hazards.enabled:
             none = np.full(size, NO_LOSS, dtype=np.int64)
             return Losses(cause=none, mine=np.full(size, -1, dtype=np.int64), radio_dropped=none >= 0)
@@ -482,10 +480,10 @@ class HazardModel:
                 yield 0, k, pts
             return
         runs = run_of[sel]
-        cuts = np.flatnonzero(np.diff(runs)) + 1
-        for part in np.split(sel, cuts):
-            b = int(run_of[part[0]])
-            robots, near = indexes[b].exact(xy, part)
+        cuts = (np.flatnonzero(runs[1:] != runs[:-1]) + 1).tolist()
+        for lo, hi in zip([0, *cuts], [*cuts, len(sel)], strict=True):
+            b = int(runs[lo])
+            robots, near = indexes[b].exact(xy, sel[lo:hi])
             for k, pts in zip(robots.tolist(), near, strict=True):
                 yield b, k, pts
 
@@ -509,13 +507,16 @@ class HazardModel:
         Robots in index order; with k new mines under one robot, the first success of k Bernoulli(p)
         trials in mine-index order is the geometric J = floor(log(1 - u) / log(1 - p)) from one uniform.
         """
+        armed: list[bool] = []  # the mines of run `at` that can still go off (not exploded,
+        at = -1  # cleared or marked): looked up once per run, kept as mines go off
         for b, k, mines in self._by_run(self._mine_screen, self._mines, xy, on_map, run_of):
             mf = self.minefields[b]
+            if b != at:
+                armed, at = (~(mf.exploded | mf.cleared | mf.marked)).tolist(), b
             p = mf.trigger_probability
             i = k % self.n
             seen = self._mine_seen[b]
-            new = [m for m in mines if not (mf.exploded[m] or mf.cleared[m] or mf.marked[m])]
-            new = [m for m in new if (i, m) not in seen]
+            new = [m for m in mines if armed[m] and (i, m) not in seen]
             if not new:
                 continue
             seen.update((i, m) for m in new)
@@ -525,6 +526,7 @@ class HazardModel:
             if j < len(new):
                 mine[k] = new[j]
                 mf.exploded[new[j]] = True
+                armed[new[j]] = False
 
     def _check(self, inp: HazardInputs, size: int) -> None:
         if inp.alive.shape != (size,) or inp.xy.shape != (size, 2):
