@@ -198,10 +198,10 @@ class SensorBatch:
         mid = 0.5 * (start + end)
         half = 0.5 * np.sqrt(np.sum((end - start) ** 2, axis=1))
         # each run's radius: the range plus its own robots' largest half step
-        cuts = np.flatnonzero(np.diff(run)) + 1
-        firsts = np.concatenate([[0], cuts])
+        cuts = np.flatnonzero(run[1:] != run[:-1]) + 1
+        firsts = np.concatenate(([0], cuts))
         ids = run[firsts]
-        counts = np.diff(np.concatenate([firsts, [len(run)]]))
+        counts = np.append(cuts, len(run)) - firsts
         radius = self._range[ids] + np.maximum.reduceat(half, firsts)
         dense = counts * self._mine_count[ids] <= DENSE_PAIRS
         radius2 = np.repeat(radius * radius, counts)
@@ -220,13 +220,17 @@ class SensorBatch:
                 continue
             out[b] = []
             if at[k + 1] > at[k]:
-                u[at[k] : at[k + 1]] = rngs[b].random(at[k + 1] - at[k])
+                rngs[b].random(out=u[at[k] : at[k + 1]])
         if not len(r):
             return
         look = inverse_cube_look(start[r], end[r], pos[r, j])
         hazard = self.sensors[int(ids[0])].sensor.width_m ** 2 / (8.0 * math.pi) * look
-        hit = u < -np.expm1(-hazard)
-        for k in np.unique(np.searchsorted(at, np.flatnonzero(hit), side="right") - 1).tolist():
+        hits = np.flatnonzero(u < -np.expm1(-hazard))
+        if not len(hits):
+            return
+        hit = np.zeros(len(r), bool)
+        hit[hits] = True
+        for k in np.unique(np.searchsorted(at, hits, side="right") - 1).tolist():
             b = int(ids[k])
             lo, hi = at[k], at[k + 1]
             mine = hit[lo:hi]
