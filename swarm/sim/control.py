@@ -57,9 +57,13 @@ def to_body(dxy: np.ndarray, heading_rad: np.ndarray) -> np.ndarray:
     c, s = np.cos(heading_rad), np.sin(heading_rad)
     if dxy.ndim == 3:
         c, s = c[:, None], s[:, None]
+    x, y = dxy[..., 0], dxy[..., 1]
     out = np.empty_like(dxy)
-    out[..., 0] = c * dxy[..., 0] + s * dxy[..., 1]
-    out[..., 1] = -s * dxy[..., 0] + c * dxy[..., 1]
+    fwd, left = out[..., 0], out[..., 1]
+    np.multiply(c, x, out=fwd)  # c x + s y
+    fwd += s * y
+    np.multiply(c, y, out=left)  # -s x + c y, the same float as c y - s x
+    left -= s * x
     return out
 
 
