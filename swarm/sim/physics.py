@@ -207,6 +207,9 @@ def _per_robot(a, dtype, n: int) -> np.ndarray:
     return np.broadcast_to(np.asarray(a, dtype=dtype), (n,))
 
 
+_STEP_FIELDS = tuple(f.name for f in fields(PhysicsStep))
+
+
 class _Waves:
     """The wave shape and crest passages of one step's substeps: one run (scalars), or a batch of
     runs, each at its own time and wave phase. A batch computes every run's phase and crest count
@@ -397,8 +400,8 @@ class Physics:
         if idx.size:
             sub = None if run is None else run[idx]
             r = self._run(state[idx], cmd[idx], jet[idx], inv[idx], t_s, dt_s, wave_phase_s, sub)
-            for f in fields(PhysicsStep):
-                getattr(res, f.name)[idx] = getattr(r, f.name)
+            for name in _STEP_FIELDS:
+                getattr(res, name)[idx] = getattr(r, name)
         return res
 
     def _run(
