@@ -57,9 +57,13 @@ def to_body(dxy: np.ndarray, heading_rad: np.ndarray) -> np.ndarray:
     c, s = np.cos(heading_rad), np.sin(heading_rad)
     if dxy.ndim == 3:
         c, s = c[:, None], s[:, None]
+    x, y = dxy[..., 0], dxy[..., 1]
     out = np.empty_like(dxy)
-    out[..., 0] = c * dxy[..., 0] + s * dxy[..., 1]
-    out[..., 1] = -s * dxy[..., 0] + c * dxy[..., 1]
+    fwd, left = out[..., 0], out[..., 1]
+    np.multiply(c, x, out=fwd)  # c x + s y
+    fwd += s * y
+    np.multiply(c, y, out=left)  # -s x + c y, the same float as c y - s x
+    left -= s * x
     return out
 
 
@@ -82,18 +86,23 @@ def drive_toward(
     if moving is not None:
         go &= moving
     err = wrap_angle(np.arctan2(d[:, 1], d[:, 0]) - state[:, 2])
+    cos_err = np.cos(err)
     yaw = np.clip(YAW_GAIN_PER_S * err, -MAX_YAW_RATE_RADPS, MAX_YAW_RATE_RADPS)
     # slow down near the target so the robot stops on it rather than circling it
-    speed = np.minimum(np.broadcast_to(speed_mps, dist.shape), 0.1 + 0.5 * dist)
-    forward = np.where(np.abs(err) < PIVOT_ERROR_RAD, speed * np.cos(err), 0.0)
+    speed = np.minimum(speed_mps, 0.1 + 0.5 * dist)
+    forward = np.where(np.abs(err) < PIVOT_ERROR_RAD, speed * cos_err, 0.0)
     half = limits.effective_half_track_m
-    surface = np.stack([forward - half * yaw, forward + half * yaw], axis=1)
-    peak = np.max(np.abs(surface), axis=1, keepdims=True)
-    surface *= np.minimum(1.0, limits.max_wheel_speed_mps / np.maximum(peak, 1e-9))
+    surface = np.empty((len(dist), 2))
+    np.subtract(forward, half * yaw, out=surface[:, 0])
+    np.add(forward, half * yaw, out=surface[:, 1])
+    peak = np.maximum(np.abs(surface[:, 0]), np.abs(surface[:, 1]))
+    surface *= np.minimum(1.0, limits.max_wheel_speed_mps / np.maximum(peak, 1e-9))[:, None]
     wheels = surface / limits.wheel_radius_m
-    jet = np.where(submersion > JET_SUBMERSION, limits.jet_thrust_max_n * np.maximum(np.cos(err), 0.0), 0.0)
-    wheels[~go] = 0.0
-    jet[~go] = 0.0
-    flipped = np.asarray(inverted, bool)
-    wheels[flipped] = -wheels[flipped][:, ::-1]
+    jet = np.where(submersion > JET_SUBMERSION, limits.jet_thrust_max_n * np.maximum(cos_err, 0.0), 0.0)
+    stop = ~go
+    wheels[stop] = 0.0
+    jet[stop] = 0.0
+    flipped = np.flatnonzero(inverted)
+    if len(flipped):
+        wheels[flipped] = -wheels[flipped][:, ::-1]
     return wheels, jet, dist

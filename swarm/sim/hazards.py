@@ -410,11 +410,9 @@ class HazardModel:
         size = n * len(runs)
         self._check(inp, size)
         # fixed shape per run: see "Determinism" above
-        u = (
-            gens[0].random((n, N_UNIFORMS))
-            if len(gens) == 1
-            else np.concatenate([g.random((n, N_UNIFORMS)) for g in gens])
-        )
+        u = np.empty((size, N_UNIFORMS))
+        for k, g in enumerate(gens):
+            g.random(out=u[k * n : (k + 1) * n])
         if not self.hazards.enabled:
             none = np.full(size, NO_LOSS, dtype=np.int64)
             return Losses(cause=none, mine=np.full(size, -1, dtype=np.int64), radio_dropped=none >= 0)
@@ -471,20 +469,19 @@ class HazardModel:
         self._stuck_s[rows] = stuck_s
         return stuck_s >= STUCK_AFTER_S - _TIME_EPS_S
 
-    def _by_run(self, screen: _ContactScreen, indexes, xy, mask, run_of):
-        """(run, local row, points) of every robot touching a point of its run's index, in row order."""
+    def _by_run(self, screen: _ContactScreen, indexes, xy, mask, run_of, worth=None):
+        """(run, local row, points) of every robot touching a point of its run's index, in row order.
+        `worth(b, rows)`, if given, says whether run b's screened robots `rows` are worth the exact
+        look: False when none of their contacts could do anything."""
         sel = screen.screen(xy, mask, run_of)
         if sel.size == 0:
             return
-        if self.runs == 1:
-            robots, near = indexes[0].exact(xy, sel)
-            for k, pts in zip(robots.tolist(), near, strict=True):
-                yield 0, k, pts
-            return
-        runs = run_of[sel]
-        cuts = np.flatnonzero(np.diff(runs)) + 1
-        for part in np.split(sel, cuts):
-            b = int(run_of[part[0]])
+        runs = [0] if self.runs == 1 else run_of[sel]
+        cuts = [] if self.runs == 1 else (np.flatnonzero(runs[1:] != runs[:-1]) + 1).tolist()
+        for lo, hi in zip([0, *cuts], [*cuts, len(sel)], strict=True):
+            b, part = int(runs[lo]), sel[lo:hi]
+            if worth is not None and not worth(b, part):
+                continue
             robots, near = indexes[b].exact(xy, part)
             for k, pts in zip(robots.tolist(), near, strict=True):
                 yield b, k, pts
@@ -509,13 +506,23 @@ class HazardModel:
         Robots in index order; with k new mines under one robot, the first success of k Bernoulli(p)
         trials in mine-index order is the geometric J = floor(log(1 - u) / log(1 - p)) from one uniform.
         """
-        for b, k, mines in self._by_run(self._mine_screen, self._mines, xy, on_map, run_of):
+        armed: dict[int, list[bool]] = {}  # each run's mines that can still go off
+
+        def worth(b: int, rows: np.ndarray) -> bool:
+            """Whether a robot of `rows` may touch a mine of run b that can still go off (not
+            exploded, cleared or marked): contacts with the others do nothing. A dense check with
+            a margin, so never False where the exact look would find such a contact."""
+            mf = self.minefields[b]
+            live = ~(mf.exploded | mf.cleared | mf.marked)
+            armed[b] = live.tolist()
+            return _may_touch(xy[rows], mf.positions_m[live], mf.trigger_radius_m)
+
+        for b, k, mines in self._by_run(self._mine_screen, self._mines, xy, on_map, run_of, worth):
             mf = self.minefields[b]
             p = mf.trigger_probability
             i = k % self.n
             seen = self._mine_seen[b]
-            new = [m for m in mines if not (mf.exploded[m] or mf.cleared[m] or mf.marked[m])]
-            new = [m for m in new if (i, m) not in seen]
+            new = [m for m in mines if armed[b][m] and (i, m) not in seen]
             if not new:
                 continue
             seen.update((i, m) for m in new)
@@ -525,12 +532,24 @@ class HazardModel:
             if j < len(new):
                 mine[k] = new[j]
                 mf.exploded[new[j]] = True
+                armed[b][new[j]] = False
 
     def _check(self, inp: HazardInputs, size: int) -> None:
         if inp.alive.shape != (size,) or inp.xy.shape != (size, 2):
             raise ValueError(f"hazard inputs for {inp.alive.shape} robots, the model has {size}")
         if not inp.dt_s > 0.0:
             raise ValueError(f"dt_s must be > 0, got {inp.dt_s}")
+
+
+def _may_touch(xy: np.ndarray, points: np.ndarray, radius_m: float) -> bool:
+    """Whether a point of `xy` (k, 2) may lie within `radius_m` of one of `points`: a dense check
+    with a relative and absolute margin far above rounding, so True wherever an exact (k-d tree)
+    look would find a pair within the radius."""
+    if not len(xy) or not len(points):
+        return False
+    d = xy[:, None, :] - points[None, :, :]
+    reach = radius_m * (1.0 + 1e-9) + 1e-9
+    return bool(np.any(d[..., 0] * d[..., 0] + d[..., 1] * d[..., 1] <= reach * reach))
 
 
 def hidden_rocks(

@@ -199,10 +199,23 @@ class PhysicsStep:
     obstacle_hit: np.ndarray  # (n,) int class of an impassable cell the robot ran into, -1 none
 
 
+def _per_robot(a, dtype, n: int) -> np.ndarray:
+    """`a` as an (n,) array of `dtype`: as it is when it already is one (the batch's columns),
+    else converted and broadcast."""
+    if type(a) is np.ndarray and a.dtype == dtype and a.shape == (n,):
+        return a
+    return np.broadcast_to(np.asarray(a, dtype=dtype), (n,))
+
+
+_STEP_FIELDS = tuple(f.name for f in fields(PhysicsStep))
+
+
 class _Waves:
     """The wave shape and crest passages of one step's substeps: one run (scalars), or a batch of
-    runs, each at its own time and wave phase (computed run by run as for one run, then spread to
-    the robots by `run`)."""
+    runs, each at its own time and wave phase. A batch computes every run's phase and crest count
+    with numpy, in the same operations as `SeaState.wave_shape` and `crests_by` (so the same
+    floats), and only the cosines with `math.cos`, run by run, as a lone run takes them; the per
+    run values are then spread to the robots by `run`."""
 
     def __init__(self, sea: SeaState, t_s, wave_phase_s, run, dt_s: float, n_sub: int) -> None:
         self.sea, self.dt_s, self.n_sub, self.run = sea, dt_s, n_sub, run
@@ -210,19 +223,23 @@ class _Waves:
             self.t, self.ph = float(t_s), float(wave_phase_s)
             self.crests = sea.crests_by(t_s, wave_phase_s)
         else:
-            self.runs = np.unique(run).tolist()
-            self.t = {b: float(t_s[b]) for b in self.runs}
-            self.ph = {b: float(wave_phase_s[b]) for b in self.runs}
-            self.crests = {b: sea.crests_by(self.t[b], self.ph[b]) for b in self.runs}
-            self.size = int(max(self.runs)) + 1 if self.runs else 0
+            self.t = np.asarray(t_s, dtype=np.float64)
+            self.ph = np.asarray(wave_phase_s, dtype=np.float64)
+            self.present = np.zeros(len(self.t), bool)  # the runs with a robot in this step
+            self.present[run] = True
+            self.crests = self._crests(0.0)
+
+    def _crests(self, frac: float) -> np.ndarray:
+        """`SeaState.crests_by` of every run at its time plus `frac` (floats holding integers)."""
+        return np.floor(((self.t + frac) - self.ph) / self.sea.wave_period_s + _CREST_EPS)
 
     def shape(self, k: int):
         frac = self.dt_s * k / self.n_sub
         if self.run is None:
             return self.sea.wave_shape(self.t + frac, self.ph)
-        per_run = np.zeros(self.size)
-        for b in self.runs:
-            per_run[b] = self.sea.wave_shape(self.t[b] + frac, self.ph[b])
+        phi = 2.0 * math.pi * ((self.t + frac) - self.ph) / self.sea.wave_period_s
+        r = self.sea.wave_skew
+        per_run = np.array([(math.cos(p) + r * math.cos(2.0 * p)) / (1.0 + r) for p in phi.tolist()])
         return per_run[self.run]
 
     def crest(self, k: int):
@@ -232,10 +249,9 @@ class _Waves:
             nxt = self.sea.crests_by(self.t + frac, self.ph)
             passed, self.crests = nxt > self.crests, nxt
             return passed
-        per_run = np.zeros(self.size, bool)
-        for b in self.runs:
-            nxt = self.sea.crests_by(self.t[b] + frac, self.ph[b])
-            per_run[b], self.crests[b] = nxt > self.crests[b], nxt
+        nxt = self._crests(frac)
+        per_run = (nxt > self.crests) & self.present
+        self.crests = nxt
         return per_run[self.run] if per_run.any() else False
 
 
@@ -363,9 +379,9 @@ class Physics:
         state = np.asarray(state, dtype=np.float64)
         n = state.shape[0]
         cmd = np.asarray(wheel_cmd_radps, dtype=np.float64).reshape(n, 2)
-        jet = np.broadcast_to(np.asarray(jet_cmd_n, dtype=np.float64), (n,))
-        inv = np.broadcast_to(np.asarray(inverted, dtype=bool), (n,))
-        act = None if active is None else np.broadcast_to(np.asarray(active, dtype=bool), (n,))
+        jet = _per_robot(jet_cmd_n, np.float64, n)
+        inv = _per_robot(inverted, bool, n)
+        act = None if active is None else _per_robot(active, bool, n)
         if act is None or act.all():
             return self._run(state, cmd, jet, inv, t_s, dt_s, wave_phase_s, run)
         res = PhysicsStep(
@@ -384,8 +400,8 @@ class Physics:
         if idx.size:
             sub = None if run is None else run[idx]
             r = self._run(state[idx], cmd[idx], jet[idx], inv[idx], t_s, dt_s, wave_phase_s, sub)
-            for f in fields(PhysicsStep):
-                getattr(res, f.name)[idx] = getattr(r, f.name)
+            for name in _STEP_FIELDS:
+                getattr(res, name)[idx] = getattr(r, name)
         return res
 
     def _run(
@@ -417,9 +433,9 @@ class Physics:
         wrench = np.zeros((m, 3))
         traction = np.zeros((m, 2))
         cell = self._cells(s[:, X], s[:, Y])
+        cls = self._terrain[cell]
         waves = _Waves(sea, t_s, wave_phase_s, run, dt_s, n_sub)
         for k in range(n_sub):
-            cls = self._terrain[cell]
             coef = self._gather(self._class_coef, cls)
             props = self._gather(self._props, cell)
             coeffs = dict(zip(COEFFICIENTS, coef[:_BUOY15], strict=True))
@@ -454,6 +470,7 @@ class Physics:
                 new[blocked, V] = 0.0
                 obstacle[blocked] = new_cls[blocked]
                 new_cell[blocked] = cell[blocked]
+                new_cls[blocked] = cls[blocked]
 
             dx, dy = new[:, X] - s[:, X], new[:, Y] - s[:, Y]
             distance += np.sqrt(dx * dx + dy * dy)
@@ -479,11 +496,10 @@ class Physics:
             elif crest is not False:  # per robot, by its run
                 hits |= (props[_SURF] > 0.0) & crest
                 hit_height = np.where(crest, np.maximum(hit_height, props[_SURF]), hit_height)
-            s, cell = new, new_cell
+            s, cell, cls = new, new_cell, new_cls
 
         # wheel power at the end of the step: each side's slip traction (rolling resistance left
         # out) at the new velocities, from the last substep, times that side's wheel surface speed
-        cls = self._terrain[cell]
         surface = omega * (self.robot.wheel_radius_m * coef[_RADIUS])[:, None]  # (m, 2): left, right
         wheel = np.maximum(traction * surface, 0.0).sum(axis=1)
         return PhysicsStep(

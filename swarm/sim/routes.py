@@ -66,6 +66,29 @@ class Routes:
         else:
             self.set(i, new[1:], sensing_from=0 if track <= 0 else int(where[track + 1]) - 1)
 
+    def may_pass(self, robots: np.ndarray, xy: np.ndarray, point: np.ndarray, radius_m: float) -> np.ndarray:
+        """Those of `robots` (standing at `xy`) whose rest of route might pass within `radius_m` of
+        `point`: a leg's bounding box grown by 2 `radius_m` holds it. A superset of the robots
+        `steer_clear` re-lays (its `clear_of` side-steps legs passing within a `radius_m` wide,
+        `radius_m` overlong band, which lies within radius_m * sqrt(2) of the leg), found for all of
+        them at once, so that only those need their own look."""
+        cur, end = self.cursor[robots], self.end[robots]
+        going = cur < end
+        robots, xy, cur, end = robots[going], xy[going], cur[going], end[going]
+        counts = end - cur
+        if not len(robots):
+            return robots
+        first = np.cumsum(counts) - counts  # each robot's first leg in the flat list
+        owner = np.repeat(np.arange(len(robots)), counts)
+        to = np.arange(int(counts.sum())) - np.repeat(first, counts) + np.repeat(cur, counts)
+        b = self.points.take(to, axis=0)
+        a = self.points.take(np.maximum(to - 1, 0), axis=0)
+        a[first] = xy  # each robot's first leg starts where it stands
+        reach = 2.0 * radius_m
+        near = np.all(np.minimum(a, b) - reach <= point, axis=1)
+        near &= np.all(np.maximum(a, b) + reach >= point, axis=1)
+        return robots[np.unique(owner[near])]
+
     def clear(self, i: int) -> None:
         self.start[i] = self.end[i] = self.cursor[i] = self.sensing_from[i] = len(self.points)
 
@@ -89,34 +112,37 @@ class Routes:
 
     def advance(self, xy: np.ndarray, mask: np.ndarray) -> None:
         """Move the cursors of robots in `mask` past every waypoint they have reached."""
+        idx = np.flatnonzero(mask & (self.cursor < self.end))
         for _ in range(4):  # a robot passes at most a few waypoints per step
-            live = mask & (self.cursor < self.end)
-            if not live.any():
+            if not len(idx):
                 return
-            idx = np.flatnonzero(live)
-            wp = self.points[self.cursor[idx]]
-            final = self.cursor[idx] == self.end[idx] - 1
+            cur = self.cursor[idx]
+            at = xy.take(idx, axis=0)
+            wp = self.points.take(cur, axis=0)
+            final = cur == self.end[idx] - 1
             radius = np.where(final, FINAL_CAPTURE_M, CAPTURE_M)
-            hit = np.hypot(*(wp - xy[idx]).T) < radius
-            along, cross, length = self._leg_coordinates(idx, xy[idx])
+            hit = np.hypot(wp[:, 0] - at[:, 0], wp[:, 1] - at[:, 1]) < radius
+            along, cross, length, _ = self._leg_coordinates(idx, cur, wp, at)
             hit |= ~final & (length > 0) & (along >= length) & (np.abs(cross) <= PASS_CROSS_TRACK_M)
-            if not hit.any():
-                return
-            self.cursor[idx[hit]] += 1
+            idx = idx[hit]
+            self.cursor[idx] += 1
+            # only a robot that has just passed a waypoint can pass another: the rest stand as they did
+            idx = idx[self.cursor[idx] < self.end[idx]]
 
-    def _leg_coordinates(self, idx: np.ndarray, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def _leg_coordinates(
+        self, idx: np.ndarray, cur_index: np.ndarray, cur: np.ndarray, xy: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """Each robot's position along and across the leg it is on (from the waypoint before its
-        cursor to the cursor's), and the leg's length; length 0 on a route's first waypoint."""
-        cur = self.points[self.cursor[idx]]
-        has_prev = self.cursor[idx] > self.start[idx]
-        prev = np.where(has_prev[:, None], self.points[np.maximum(self.cursor[idx] - 1, 0)], cur)
+        cursor to the cursor's, `cur`, at point index `cur_index`), the leg's length (0 on a
+        route's first waypoint) and its first point (the cursor's own point there)."""
+        prev = self.points.take(np.where(cur_index > self.start[idx], cur_index - 1, cur_index), axis=0)
         leg = cur - prev
         length = np.hypot(leg[:, 0], leg[:, 1])
         unit = leg / np.maximum(length, 1e-12)[:, None]
         rel = xy - prev
         along = rel[:, 0] * unit[:, 0] + rel[:, 1] * unit[:, 1]
         cross = unit[:, 0] * rel[:, 1] - unit[:, 1] * rel[:, 0]
-        return along, cross, length
+        return along, cross, length, prev
 
     def targets(self, xy: np.ndarray) -> np.ndarray:
         """(n, 2) where each robot steers: `LOOKAHEAD_M` ahead of its projection on its current leg,
@@ -126,13 +152,23 @@ class Routes:
         idx = np.flatnonzero(self.cursor < self.end)
         if not len(idx):
             return out
-        cur = self.points[self.cursor[idx]]
-        along, _, length = self._leg_coordinates(idx, xy[idx])
+        cur_index = self.cursor[idx]
+        cur = self.points.take(cur_index, axis=0)
+        along, _, length, prev = self._leg_coordinates(idx, cur_index, cur, xy.take(idx, axis=0))
         ahead = np.clip(along, 0.0, length) + LOOKAHEAD_M
         on_leg = (length > 0) & (ahead < length)
-        prev = self.points[np.maximum(self.cursor[idx] - 1, 0)]
         frac = np.where(on_leg, ahead / np.maximum(length, 1e-12), 1.0)
         out[idx] = np.where(on_leg[:, None], prev + (cur - prev) * frac[:, None], cur)
+        return out
+
+    def steer_points(self, xy: np.ndarray) -> np.ndarray:
+        """(n, 2) `targets` for the robots on their routes, and the last point of its route for
+        each robot done with one (its own position without a route): what the built-in
+        controller steers for, a finished route's end being where the robot keeps station."""
+        out = self.targets(xy)
+        finished = np.flatnonzero((self.cursor >= self.end) & (self.end > self.start))
+        if len(finished):
+            out[finished] = self.points.take(self.end[finished] - 1, axis=0)
         return out
 
     def progress(self) -> np.ndarray:

@@ -41,6 +41,13 @@ class SensorBatch:
         self._dirty = np.ones(self.runs, bool)
         self._keys = np.empty(0, np.int64)
         self._per_run: list[np.ndarray] = [np.empty(0, np.int64)] * self.runs
+        # each run's mines and which are targets, padded to the largest field (NaN, False), and
+        # its mine count and sensor range: kept by `_refresh`, as the screen keys are
+        self._mine_xy = np.full((self.runs, 0, 2), np.nan)
+        self._target = np.zeros((self.runs, 0), bool)
+        self._mine_count = np.zeros(self.runs, np.int64)
+        self._range = np.zeros(self.runs)
+        self._discrete = np.zeros(self.runs, bool)  # a sensor that is not `continuous`
 
     def dirty(self, b: int) -> None:
         self._dirty[b] = True
@@ -56,13 +63,26 @@ class SensorBatch:
         return np.asarray(run, np.int64) * _RUN_STRIDE + (bins[:, 0] << 22) + bins[:, 1]
 
     def _refresh(self) -> None:
-        """Each dirty run's screen keys: the bins around its target mines (`_maybe_near`'s)."""
+        """Each dirty run's screen keys (the bins around its target mines, `_maybe_near`'s) and its
+        rows of the mine and target arrays `_looks` reads."""
+        width = max((s._m for s in self.sensors if s is not None), default=0)
+        if width > self._target.shape[1]:  # a larger field (a reset): every run's rows anew
+            self._mine_xy = np.full((self.runs, width, 2), np.nan)
+            self._target = np.zeros((self.runs, width), bool)
+            self._dirty[:] = True
         for b in np.flatnonzero(self._dirty).tolist():
             s = self.sensors[b]
             keys = np.empty(0, np.int64)
+            self._mine_xy[b] = np.nan
+            self._target[b] = False
+            self._mine_count[b] = 0 if s is None else s._m
+            self._discrete[b] = s is not None and not s.continuous
             if s is not None and s._m:
                 field = s.minefield
                 target = field.active & ~field.detected
+                self._mine_xy[b, : s._m] = field.positions_m
+                self._target[b, : s._m] = target
+                self._range[b] = s.range_m
                 if target.any():
                     bins = np.floor(field.positions_m[target] / self.size).astype(np.int64)
                     around = (bins[:, None, :] + _NEIGHBOUR_BINS[None, :, :]).reshape(-1, 2)
@@ -106,6 +126,9 @@ class SensorBatch:
         seg = xy[who] - last_xy[who]
         with np.errstate(invalid="ignore"):
             jumped = (seg[:, 0] * seg[:, 0] + seg[:, 1] * seg[:, 1]) > SCREEN_MARGIN_M**2
+        busy = self._discrete.copy()  # a sensor that draws once per pass: its own update
+        busy[run[in_bins]] = True
+        busy[run[jumped]] = True
         near_run = np.zeros(self.runs, bool)
         near_run[run[in_bins]] = True
         jump_run = np.zeros(self.runs, bool)
@@ -113,8 +136,17 @@ class SensorBatch:
         alarm_run = np.zeros(self.runs, bool)
         if self.false_alarms:
             alarm_run = (sensing & (distance_m > 0)).reshape(self.runs, n).any(axis=1)
+            busy |= alarm_run
+        if len(runs) < self.runs:
+            stepped = np.zeros(self.runs, bool)
+            stepped[runs] = True
+            busy &= stepped
+        # every other run's sensor is continuous (so it has no passes in progress) with no robot
+        # near a target, none that jumped and no false alarm to draw for: it has nothing to do
+        busy_runs = np.flatnonzero(busy).tolist()
+        near_run, jump_run, alarm_run = near_run.tolist(), jump_run.tolist(), alarm_run.tolist()
         looks: list[int] = []
-        for b in runs:
+        for b in busy_runs:
             s = self.sensors[b]
             if s is None:
                 continue
@@ -136,7 +168,7 @@ class SensorBatch:
             wanted = np.zeros(self.runs, bool)
             wanted[looks] = True
             self._looks(xy, last_xy, sensing, who[wanted[run] & in_bins], t_s, rngs, out)
-        for b in runs:  # false alarms after the looks, from the same stream
+        for b in busy_runs if self.false_alarms else ():  # false alarms after the looks, same stream
             s = self.sensors[b]
             if s is not None and s.continuous and b in out and not (jump_run[b] or len(s._keys)):
                 rows = slice(b * n, (b + 1) * n)
@@ -148,8 +180,6 @@ class SensorBatch:
             last_xy[~sensing] = np.nan
             last_xy[who] = xy[who]
             return out
-        stepped = np.zeros(self.runs, bool)
-        stepped[runs] = True
         rows = np.repeat(stepped, n)
         last_xy[rows & ~sensing] = np.nan
         keep = rows & sensing
@@ -157,7 +187,9 @@ class SensorBatch:
         return out
 
     def _looks(self, xy, last_xy, sensing, robots, t_s, rngs, out) -> None:
-        """`MineSensor._looks` for the screened `robots` (global rows, run-major) of `runs`."""
+        """`MineSensor._looks` for the screened `robots` (global rows, run-major) of `runs`: the
+        pairs and look integrals of every run at once, then each run's uniforms from its own
+        generator; only a run with a hit goes on to `MineSensor._found`."""
         n = self.n
         run = robots // n
         end = xy[robots]
@@ -166,46 +198,41 @@ class SensorBatch:
         mid = 0.5 * (start + end)
         half = 0.5 * np.sqrt(np.sum((end - start) ** 2, axis=1))
         # each run's radius: the range plus its own robots' largest half step
-        cuts = np.flatnonzero(np.diff(run)) + 1
-        firsts = np.concatenate([[0], cuts])
-        run_ids = run[firsts].tolist()
-        counts = np.diff(np.concatenate([firsts, [len(run)]])).tolist()
-        halves = np.maximum.reduceat(half, firsts).tolist()
-        sensors = [self.sensors[b] for b in run_ids]
-        width = max(len(s.minefield) for s in sensors)
-        mines = np.full((len(run_ids), width, 2), np.nan)
-        target = np.zeros((len(run_ids), width), bool)
-        radius2 = np.empty(len(run_ids))
-        dense = np.ones(len(run_ids), bool)
-        for k, s in enumerate(sensors):
-            field = s.minefield
-            m = len(field)
-            mines[k, :m] = field.positions_m
-            target[k, :m] = field.active & ~field.detected
-            r = s.range_m + float(halves[k])
-            radius2[k] = r * r
-            dense[k] = counts[k] * m <= DENSE_PAIRS
-        slot = np.repeat(np.arange(len(run_ids)), counts)
-        pos = mines[slot]  # (robots, width, 2)
+        cuts = np.flatnonzero(run[1:] != run[:-1]) + 1
+        firsts = np.concatenate(([0], cuts))
+        ids = run[firsts]
+        counts = np.append(cuts, len(run)) - firsts
+        radius = self._range[ids] + np.maximum.reduceat(half, firsts)
+        dense = counts * self._mine_count[ids] <= DENSE_PAIRS
+        radius2 = np.repeat(radius * radius, counts)
+        pos = self._mine_xy[run]  # (robots, width, 2)
         d2 = (mid[:, None, 0] - pos[:, :, 0]) ** 2 + (mid[:, None, 1] - pos[:, :, 1]) ** 2
-        near = (d2 <= radius2[slot][:, None]) & target[slot] & dense[slot][:, None]
+        near = (d2 <= radius2[:, None]) & self._target[run]
+        if not dense.all():
+            near &= np.repeat(dense, counts)[:, None]
         r, j = np.nonzero(near)  # robot then mine within each run: the order each run draws in
-        hazard = np.empty(0)
-        if len(r):
-            look = inverse_cube_look(start[r], end[r], pos[r, j])
-            hazard = sensors[0].sensor.width_m ** 2 / (8.0 * math.pi) * look
-        pair_slot = slot[r]
-        at = np.searchsorted(pair_slot, np.arange(len(run_ids) + 1))
-        for k, b in enumerate(run_ids):
-            s = self.sensors[b]
-            if not dense[k]:  # too many pairs for the dense check: the run's own (k-d tree) way
+        at = [*np.searchsorted(run[r], ids).tolist(), len(r)]
+        u = np.empty(len(r))
+        for k, (b, is_dense) in enumerate(zip(ids.tolist(), dense.tolist(), strict=True)):
+            if not is_dense:  # too many pairs for the dense check: the run's own (k-d tree) way
                 rows = slice(b * n, (b + 1) * n)
-                out[b] = s._looks(xy[rows], sensing[rows], float(t_s[b]), rngs[b])
+                out[b] = self.sensors[b]._looks(xy[rows], sensing[rows], float(t_s[b]), rngs[b])
                 continue
+            out[b] = []
+            if at[k + 1] > at[k]:
+                rngs[b].random(out=u[at[k] : at[k + 1]])
+        if not len(r):
+            return
+        look = inverse_cube_look(start[r], end[r], pos[r, j])
+        hazard = self.sensors[int(ids[0])].sensor.width_m ** 2 / (8.0 * math.pi) * look
+        hits = np.flatnonzero(u < -np.expm1(-hazard))
+        if not len(hits):
+            return
+        hit = np.zeros(len(r), bool)
+        hit[hits] = True
+        for k in np.unique(np.searchsorted(at, hits, side="right") - 1).tolist():
+            b = int(ids[k])
             lo, hi = at[k], at[k + 1]
-            if hi == lo:
-                out[b] = []
-                continue
-            hit = rngs[b].random(hi - lo) < -np.expm1(-hazard[lo:hi])
-            local = robots[r[lo:hi][hit]] - b * n
-            out[b] = s._found(local, j[lo:hi][hit], float(t_s[b]))
+            mine = hit[lo:hi]
+            local = robots[r[lo:hi][mine]] - b * n
+            out[b] = self.sensors[b]._found(local, j[lo:hi][mine], float(t_s[b]))

@@ -260,11 +260,10 @@ class World:
     def route_goal(self) -> np.ndarray:
         """(B * n, 2) the last point of each robot's route (its own position without one)."""
         routes = self.routes
-        end = np.maximum(routes.end - 1, 0)
-        has = routes.end > routes.start
+        has = np.flatnonzero(routes.end > routes.start)
         goal = self.flat("robot_state")[:, :2].copy()
-        if len(routes.points):
-            goal[has] = routes.points[end[has]]
+        if len(has):
+            goal[has] = routes.points.take(routes.end[has] - 1, axis=0)
         return goal
 
     def controller_commands(self) -> tuple[np.ndarray, np.ndarray]:
@@ -276,8 +275,9 @@ class World:
         command = self.flat("command")
         done = self.routes.done()
         # a robot at the end of its route keeps station there: back when it has drifted off
-        route_targets = np.where(done[:, None], self.route_goal(), self.routes.targets(xy))
-        off_station = np.hypot(*(route_targets - xy).T) > STATION_KEEP_M
+        route_targets = self.routes.steer_points(xy)
+        gap = route_targets - xy
+        off_station = np.hypot(gap[:, 0], gap[:, 1]) > STATION_KEEP_M
         follow = (command == FOLLOW) | (command == RETURN)
         # a marker follows its route to the mine, then closes in on the mine itself
         routed = follow | ((command == MARK) & ~done)
@@ -380,7 +380,7 @@ class World:
         or the next event is within two steps). Runners use it (`simulate`); `step` never does."""
         s, run, dt = self.setup, self.runs[b], self.dt_s
         alive, phase, on_map = self.alive[b], self.phase[b], self.on_map[b]
-        if not self.in_agents[b].any() or (alive & on_map).any():
+        if not np.count_nonzero(self.in_agents[b]) or np.count_nonzero(alive & on_map):
             return 0
         waiting = alive & (phase == WAITING)
         swimming = alive & (phase != WAITING) & ~on_map
@@ -466,8 +466,9 @@ class World:
             self.runs[b].global_phase("beach_operations")
         phases = s.mission.phases
         if phases.return_to_sea.enabled:
+            late = (self.t_s >= phases.beach_end_s).tolist()
             for b in live:
-                if self.t_s[b] >= phases.beach_end_s:
+                if late[b]:
                     self.runs[b].global_phase("return_to_sea")
 
     def _flip(self, hits: np.ndarray, height_m: np.ndarray) -> None:
@@ -515,8 +516,10 @@ class World:
     def _report(self, run: RunView, det: sensing.Detection) -> None:
         b = run.b
         xy = np.asarray(det.xy, dtype=np.float64)
-        for i in np.flatnonzero(self.alive[b] & self.on_map[b] & (self.marking[b] < 0)).tolist():
-            run.routes.steer_clear(i, self.robot_state[b, i, :2], xy[None], AVOID_MINE_M)
+        who = np.flatnonzero(self.alive[b] & self.on_map[b] & (self.marking[b] < 0))
+        n = self.n
+        for g in self.routes.may_pass(who + b * n, self.robot_state[b, who, :2], xy, AVOID_MINE_M).tolist():
+            run.routes.steer_clear(g - b * n, self.robot_state[b, g - b * n, :2], xy[None], AVOID_MINE_M)
         run.objects_m = np.vstack([run.objects_m, xy[None]])
         run.object_mine = np.append(run.object_mine, det.mine)
         run.object_marker = np.append(run.object_marker, -1)
@@ -526,19 +529,25 @@ class World:
         )
 
     def _update_marks(self) -> None:
-        marking = self.alive & (self.marking >= 0)
-        for b in np.flatnonzero(marking.any(axis=1)).tolist():
+        """Each marking robot within `MARK_RADIUS_M` of its object marks it, if nobody has yet:
+        the distances of every run's markers at once, then the few marks, run by run."""
+        bs, who = np.nonzero(self.alive & (self.marking >= 0))  # run-major, as the runs log
+        if not len(bs):
+            return
+        k = self.marking[bs, who]
+        obj_xy = np.empty((len(bs), 2))
+        cuts = np.flatnonzero(bs[1:] != bs[:-1]).tolist()
+        for lo, hi in zip([0, *(c + 1 for c in cuts)], [*(c + 1 for c in cuts), len(bs)], strict=True):
+            obj_xy[lo:hi] = self.runs[int(bs[lo])].objects_m[k[lo:hi]]
+        d = self.robot_state[bs, who, :2] - obj_xy
+        near = np.flatnonzero(np.hypot(d[:, 0], d[:, 1]) <= MARK_RADIUS_M)
+        for b, i, obj in zip(bs[near].tolist(), who[near].tolist(), k[near].tolist(), strict=True):
             run = self.runs[b]
-            who = np.flatnonzero(marking[b])
-            k = self.marking[b, who]
-            d = self.robot_state[b, who, :2] - run.objects_m[k]
-            near = np.hypot(d[:, 0], d[:, 1]) <= MARK_RADIUS_M
-            for i, obj in zip(who[near].tolist(), k[near].tolist(), strict=True):
-                if run.object_marker[obj] < 0:
-                    run.object_marker[obj] = i
-                    if run.object_mine[obj] >= 0:
-                        run.minefield.marked[run.object_mine[obj]] = True
-                    run.log_event("mark", i, object=obj, mine=int(run.object_mine[obj]))
+            if run.object_marker[obj] < 0:
+                run.object_marker[obj] = i
+                if run.object_mine[obj] >= 0:
+                    run.minefield.marked[run.object_mine[obj]] = True
+                run.log_event("mark", i, object=obj, mine=int(run.object_mine[obj]))
 
     def _update_comms(self, live: list[int]) -> None:
         """Update the radio graphs of the live runs whose radio period is up, all in one batch
@@ -679,20 +688,22 @@ class World:
 
     def _score(self, live: list[int], time_up: np.ndarray) -> np.ndarray:
         ashore = self.alive & self.on_map & (self.phase >= BEACH)
-        any_ashore = ashore.any(axis=1)
+        any_ashore = ashore.any(axis=1).tolist()
+        ended = time_up.tolist()
+        times = self.t_s.tolist()
         change = np.zeros(self.B)
         dt = self.dt_s
         for b in live:
             run = self.runs[b]
             score = run.score
-            t = float(self.t_s[b])
-            score.detected = int(run.minefield.detected.sum())
+            t = times[b]
+            score.detected = np.count_nonzero(run.minefield.detected)
             if score.beach_start_s is None and any_ashore[b]:
                 score.beach_start_s = t
             needs_xy = bool(score.zones or score.surveillance or score.beacons)
             xy = self.robot_state[b][ashore[b], :2] if needs_xy else _NO_XY
             score.update(t, dt, xy, run.relay_up)
-            if time_up[b]:
+            if ended[b]:
                 score.at_end = True
             if self.score_every_step:
                 now = score.score()

@@ -1,0 +1,101 @@
+"""Route following over many robots: the batched shortcuts agree with the plain per-robot rules."""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from swarm.sim.hazards import _may_touch
+from swarm.sim.routes import CAPTURE_M, FINAL_CAPTURE_M, PASS_CROSS_TRACK_M, Routes
+
+
+def _random_routes(rng: np.random.Generator, n: int) -> tuple[Routes, np.ndarray]:
+    routes = Routes(n)
+    for i in range(n):
+        k = int(rng.integers(0, 6))
+        if k:
+            routes.set(i, rng.uniform(0.0, 40.0, size=(k, 2)))
+            routes.cursor[i] = routes.start[i] + int(rng.integers(0, k + 1))
+    return routes, rng.uniform(0.0, 40.0, size=(n, 2))
+
+
+def test_steer_points_are_the_targets_and_the_ends_of_finished_routes() -> None:
+    rng = np.random.default_rng(3)
+    for _ in range(20):
+        routes, xy = _random_routes(rng, 30)
+        done = routes.done()
+        goal = xy.copy()
+        has = routes.end > routes.start
+        goal[has] = routes.points[routes.end[has] - 1]
+        want = np.where(done[:, None], goal, routes.targets(xy))
+        assert np.array_equal(routes.steer_points(xy), want)
+
+
+def _advance_every_robot(routes: Routes, xy: np.ndarray, mask: np.ndarray) -> None:
+    """The waypoint rule as first written: every robot of `mask` looked at again in each round."""
+    for _ in range(4):
+        idx = np.flatnonzero(mask & (routes.cursor < routes.end))
+        if not len(idx):
+            return
+        cur = routes.cursor[idx]
+        wp = routes.points[cur]
+        final = cur == routes.end[idx] - 1
+        hit = np.hypot(*(wp - xy[idx]).T) < np.where(final, FINAL_CAPTURE_M, CAPTURE_M)
+        prev = np.where((cur > routes.start[idx])[:, None], routes.points[np.maximum(cur - 1, 0)], wp)
+        leg = wp - prev
+        length = np.hypot(leg[:, 0], leg[:, 1])
+        unit = leg / np.maximum(length, 1e-12)[:, None]
+        rel = xy[idx] - prev
+        along = rel[:, 0] * unit[:, 0] + rel[:, 1] * unit[:, 1]
+        cross = unit[:, 0] * rel[:, 1] - unit[:, 1] * rel[:, 0]
+        hit |= ~final & (length > 0) & (along >= length) & (np.abs(cross) <= PASS_CROSS_TRACK_M)
+        if not hit.any():
+            return
+        routes.cursor[idx[hit]] += 1
+
+
+def test_advance_passes_the_waypoints_the_every_robot_rule_passes() -> None:
+    rng = np.random.default_rng(4)
+    for _ in range(30):
+        n = 30
+        a, b = Routes(n), Routes(n)
+        for i in range(n):  # short legs along a line, so a robot may pass several in one step
+            k = int(rng.integers(0, 8))
+            if k:
+                pts = np.cumsum(rng.uniform(0.2, 1.5, size=(k, 2)), axis=0)
+                a.set(i, pts)
+                b.set(i, pts)
+        xy = rng.uniform(0.0, 8.0, size=(n, 2))
+        mask = rng.random(n) < 0.8
+        for _ in range(3):
+            _advance_every_robot(a, xy, mask)
+            b.advance(xy, mask)
+            assert np.array_equal(a.cursor, b.cursor)
+            xy = xy + rng.normal(0.0, 1.0, size=(n, 2))
+
+
+def test_may_pass_holds_every_robot_steer_clear_would_re_lay() -> None:
+    rng = np.random.default_rng(5)
+    for _ in range(30):
+        routes, xy = _random_routes(rng, 25)
+        point = rng.uniform(0.0, 40.0, size=2)
+        robots = np.arange(25)
+        flagged = set(routes.may_pass(robots, xy, point, 1.0).tolist())
+        for i in robots:
+            before = (routes.start[i], routes.end[i])
+            routes.steer_clear(int(i), xy[i], point[None], 1.0)
+            if (routes.start[i], routes.end[i]) != before:
+                assert i in flagged
+
+
+def test_may_touch_is_true_wherever_the_tree_finds_a_contact() -> None:
+    rng = np.random.default_rng(6)
+    for _ in range(200):
+        points = rng.uniform(0.0, 5.0, size=(int(rng.integers(1, 8)), 2))
+        xy = rng.uniform(0.0, 5.0, size=(int(rng.integers(1, 6)), 2))
+        r = float(rng.uniform(0.05, 1.0))
+        if rng.random() < 0.3:  # a robot exactly at the radius of a point
+            xy[0] = points[0] + [r, 0.0]
+        found = any(cKDTree(points).query_ball_point(xy, r, return_length=True))
+        if found:
+            assert _may_touch(xy, points, r)
