@@ -12,7 +12,7 @@ is shared: alternating spreads other programs' load over both). Today's way is t
 `--batch 1` (each run alone, through the PettingZoo adapter), or, with `--today-ref REF`, the code
 of git commit REF (`git archive` into a temporary folder, run in a fresh Python process with that
 folder first on its path). Batched is `run_study(..., batch=B)` (B automatic by default: each
-point's runs in batches of up to 32). Both plan the point once (each in its own fresh state) and
+point's runs in batches of up to 64). Both plan the point once (each in its own fresh state) and
 write every file; the rate is runs / wall time of the `run_study` call, the ratio batched / today.
 Check: the two results tables are identical apart from runtime_s.
 

@@ -984,7 +984,7 @@ def _add_study_command(commands) -> None:
         type=int,
         metavar="B",
         help="runs of a point each worker steps together on the batched simulator (default: "
-        "automatic, up to 32; 1: one at a time); the table is the same whatever B",
+        "automatic, up to 64; 1: one at a time); the table is the same whatever B",
     )
     st.add_argument("--target", type=float, default=0.95, help="success probability to reach (default 0.95)")
     st.add_argument(

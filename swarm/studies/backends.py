@@ -26,7 +26,7 @@ BACKENDS = ("local", "ray")
 RAY_RETRIES = 3
 #: The automatic batch size: at most this many runs, and this many robots over all its runs (past
 #: a few thousand robots a step's numpy work outweighs its Python overhead: batching gains little).
-AUTO_BATCH_RUNS = 32
+AUTO_BATCH_RUNS = 64
 AUTO_BATCH_ROBOTS = 4096
 
 

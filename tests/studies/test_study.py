@@ -151,7 +151,8 @@ def test_batches_hold_runs_of_one_point_up_to_their_size(tiny) -> None:
     assert [[(t.point, t.run) for t in g] for g in groups] == [
         [(0, 0), (0, 1)], [(0, 2), (0, 3)], [(0, 4)], [(1, 0), (1, 1), (1, 2), (1, 3), (1, 4)]
     ]  # fmt: skip
-    assert backends.auto_batch(100, 2, 24) == 32
+    assert backends.auto_batch(100, 2, 24) == 50  # each worker's share in one batch
+    assert backends.auto_batch(1000, 1, 24) == backends.AUTO_BATCH_RUNS
     assert backends.auto_batch(10, 4, 24) == 3
     assert backends.auto_batch(100, 1, 1000) == 4
     assert backends.auto_batch(5, 1, 100_000) == 1
