@@ -145,8 +145,10 @@ class MissionScore:
         vals = self.values()
         if not vals:
             return 0.0
-        parts = [1.0 if self.targets[k] <= 0 else min(1.0, v / self.targets[k]) for k, v in vals.items()]
-        return float(np.mean(parts))
+        total = 0.0  # in order from 0, as numpy sums fewer than 8 numbers, without its call overhead
+        for k, v in vals.items():
+            total += 1.0 if self.targets[k] <= 0 else min(1.0, v / self.targets[k])
+        return total / len(vals)
 
     def success(self) -> bool:
         """Whether every criterion is met now (`outcome()["success"]`, without building it)."""

@@ -89,7 +89,8 @@ class SensorBatch:
                     keys = self._bin_keys(around, b)
             self._per_run[b] = keys
         self._dirty[:] = False
-        self._keys = np.unique(np.concatenate(self._per_run))
+        keys = np.sort(np.concatenate(self._per_run))  # np.unique's hash table is slower here
+        self._keys = keys[np.concatenate(([True], keys[1:] != keys[:-1]))] if len(keys) else keys
 
     def step(
         self,
