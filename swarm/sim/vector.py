@@ -239,8 +239,8 @@ class SwarmVectorEnv:
             terminated = np.stack(hooks) & was_in
         truncated = was_in & ~terminated & time_up[:, None]
         self.world.finish(terminated, time_up)
-        for env in self.envs:
-            env.synced()
+        for k in np.flatnonzero((was_in & ~self.world.in_agents).any(axis=1)).tolist():
+            self.envs[k].synced()  # the runs some robot left
         was_active = self._active.copy()
         self._returns += rewards
         self._lengths += 1
