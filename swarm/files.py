@@ -11,6 +11,7 @@ import os
 import re
 import secrets
 import sys
+import time
 import tokenize
 import zipfile
 import zlib
@@ -23,17 +24,25 @@ from swarm.errors import FolderBusy, InputError, OutputError, SwarmError
 
 #: The lock file `folder_lock` keeps inside an output folder while a process writes it.
 LOCK_FILE = ".swarm.lock"
+#: How long a refused process waits for the holder's line in the lock file (`_holder`).
+HOLDER_WAIT_S = 1.0
 _held: dict[Path, int] = {}  # folders this process holds, and how many nested holds
 
 
-def _holder(fd: int) -> str:
-    """What the lock file says about the process holding it ("pid 1234 (swarm study ...)")."""
-    with contextlib.suppress(OSError):
-        text = os.pread(fd, 4096, 0).decode("utf-8", "replace").strip()
-        pid, _, command = text.partition(" ")
-        if pid.isdigit():
-            return f"pid {pid} ({command})" if command else f"pid {pid}"
-    return "another process"
+def _holder(fd: int, wait_s: float = HOLDER_WAIT_S) -> str:
+    """What the lock file says about the process holding it ("pid 1234 (swarm study ...)"). The
+    holder writes its line just after it takes the lock, so an empty file is read again for up to
+    `wait_s` before the holder is called "another process"."""
+    deadline = time.monotonic() + wait_s
+    while True:
+        with contextlib.suppress(OSError):
+            text = os.pread(fd, 4096, 0).decode("utf-8", "replace").strip()
+            pid, _, command = text.partition(" ")
+            if pid.isdigit():
+                return f"pid {pid} ({command})" if command else f"pid {pid}"
+        if time.monotonic() >= deadline:
+            return "another process"
+        time.sleep(0.01)
 
 
 @contextlib.contextmanager

@@ -4,10 +4,12 @@ nothing; a holder killed with SIGKILL leaves the folder free; nested holds in on
 from __future__ import annotations
 
 import errno
+import fcntl
 import os
 import signal
 import subprocess
 import sys
+import threading
 from pathlib import Path
 
 import pytest
@@ -57,6 +59,24 @@ def test_a_second_process_is_refused_naming_the_folder_and_the_holder(tmp_path) 
         proc.communicate("")
     assert proc.returncode == 0
     assert sorted(p.name for p in out.iterdir()) == ["results.parquet"]  # the lock file went with it
+
+
+def test_a_holder_that_has_not_written_its_line_yet_is_still_named(tmp_path) -> None:
+    """The race CI met: the second process reads the lock file between the holder's lock and its
+    line. It waits for the line instead of naming "another process"."""
+    folder = tmp_path / "out"
+    folder.mkdir()
+    fd = os.open(folder / LOCK_FILE, os.O_RDWR | os.O_CREAT)
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX)  # locked, nothing written yet
+        late = threading.Timer(0.2, os.pwrite, (fd, b"4242 swarm study m.yaml\n", 0))
+        late.start()
+        with pytest.raises(FolderBusy) as refused, folder_lock(folder):
+            pass
+        late.join()
+    finally:
+        os.close(fd)
+    assert "in use by pid 4242 (swarm study m.yaml)" in str(refused.value)
 
 
 def test_a_holder_killed_with_sigkill_leaves_the_folder_free(tmp_path) -> None:
