@@ -359,7 +359,7 @@ class RadioNet:
             ok = (b < len(live)) & (a != b)
             a, b = a[ok], b[ok]
             lo_, hi_ = np.minimum(a, b), np.maximum(a, b)
-            keys = _sorted_unique(live[lo_].astype(np.int64) * big_n + live[hi_])
+            keys = sorted_unique(live[lo_].astype(np.int64) * big_n + live[hi_])
         elif len(live) >= 2 and r_rr > 0:
             lo, hi = pos[live].min(axis=0), pos[live].max(axis=0)
             if float(np.hypot(*(hi - lo))) <= r_rr:
@@ -395,7 +395,7 @@ class RadioNet:
         return prx
 
 
-def _sorted_unique(keys: np.ndarray) -> np.ndarray:
+def sorted_unique(keys: np.ndarray) -> np.ndarray:
     """`np.unique` of int keys by sorting (several times faster than its hash table here)."""
     keys = np.sort(keys)
     return keys[np.concatenate(([True], keys[1:] != keys[:-1]))] if len(keys) else keys

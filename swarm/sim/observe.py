@@ -23,15 +23,6 @@ from swarm.sim.setup import MissionSetup
 DENSE_NEAREST_PAIRS = 200_000
 
 
-class _Neighbours:
-    """One run's working links as sorted keys, kept between radio updates (`Observer._link_keys`);
-    its neighbour table and link flags live in the observer's batch arrays."""
-
-    def __init__(self) -> None:
-        self.keys_version = -1
-        self.keys = np.empty(0, dtype=np.int64)
-
-
 class Observer:
     """The default observation of the runs of one batch (module docstring)."""
 
@@ -45,12 +36,7 @@ class Observer:
         fx, fy = np.meshgrid(offs, offs, indexing="ij")
         #: Body-frame sample offsets of the terrain patch (rows forward, columns left), flattened.
         self.patch_offsets = (fx.ravel(), fy.ravel())
-        bm = setup.beach
-        #: (cells, 2) float32: speed fraction and elevation of every cell, row-major.
-        self.patch_grid = np.column_stack([setup.speed_grid.ravel(), bm.elevation_m.ravel()]).astype(
-            np.float32
-        )
-        self._nb: dict[int, _Neighbours] = {}  # per observed run, made when first needed
+        self.patch_grid = setup.patch_grid
         k = layout.neighbours
         #: (runs, n, k) each robot's table neighbours (-1: none) and whether the link to each works.
         self._tables = np.full((runs, self.n, k), -1, dtype=np.intp)
@@ -61,7 +47,6 @@ class Observer:
 
     def reset_run(self, b: int) -> None:
         """Forget run b's neighbour tables (a new episode)."""
-        self._nb.pop(b, None)
         self._tables[b] = -1
         self._linked[b] = False
         self._table_version[b] = -1
@@ -156,9 +141,6 @@ class Observer:
         """Run b's neighbour table, (n, k) ids of each robot's k nearest live robots, as of the last
         radio update or change in who is on the map (the table its radio keeps), and which of
         those links work: fixed until the next radio update, which refreshes the table."""
-        nb = self._nb.get(b)
-        if nb is None:
-            nb = self._nb[b] = _Neighbours()
         live = np.flatnonzero(on)
         k = self.layout.neighbours
         table = np.full((self.n, k), -1, dtype=np.intp)
@@ -168,8 +150,10 @@ class Observer:
             _, idx = cKDTree(xy, balanced_tree=False, compact_nodes=False).query(xy, k=q)
             table[live, : q - 1] = live[idx[:, 1:]]  # the first is itself
         self._tables[b] = table
-        keys = self._link_keys(run, nb)
-        query = np.repeat(np.arange(self.n), k).astype(np.int64) * run.links.n_nodes
+        # the working links as sorted keys row * N + col (CSR columns ascend within each row)
+        links, big_n = run.links, run.links.n_nodes
+        keys = np.repeat(np.arange(big_n, dtype=np.int64), np.diff(links.indptr)) * big_n + links.indices
+        query = np.repeat(np.arange(self.n), k).astype(np.int64) * big_n
         query += np.maximum(table, 0).ravel()
         at = np.minimum(np.searchsorted(keys, query), max(len(keys) - 1, 0))
         hit = keys[at] == query if len(keys) else np.zeros(len(query), bool)
@@ -243,15 +227,3 @@ class Observer:
         near = np.argmin(np.where(open_[:, None, :], d2, np.inf), axis=2)  # the first of equals, as alone
         target = np.take_along_axis(objs, near[..., None], axis=1)
         block[rows] = to_body((target - xy).reshape(-1, 2), state[rows, 2])
-
-    @staticmethod
-    def _link_keys(run, nb: _Neighbours) -> np.ndarray:
-        """Working links as sorted keys row * N + col (both directions), once per radio update
-        (the links' CSR columns ascend within each row)."""
-        if nb.keys_version != run.links_version:
-            links = run.links
-            big_n = links.n_nodes
-            rows = np.repeat(np.arange(big_n, dtype=np.int64), np.diff(links.indptr))
-            nb.keys = rows * big_n + links.indices
-            nb.keys_version = run.links_version
-        return nb.keys

@@ -174,7 +174,10 @@ class SeaState:
 
     def wave_shape(self, t_s: float, wave_phase_s: float) -> float:
         """Shoreward wave velocity over its crest value at time t: 1 at a crest, zero mean."""
-        phi = 2.0 * math.pi * (t_s - wave_phase_s) / self.wave_period_s
+        return self.shape_at_phase(2.0 * math.pi * (t_s - wave_phase_s) / self.wave_period_s)
+
+    def shape_at_phase(self, phi: float) -> float:
+        """`wave_shape` at wave phase `phi` (rad; 0 at a crest)."""
         r = self.wave_skew
         return (math.cos(phi) + r * math.cos(2.0 * phi)) / (1.0 + r)
 
@@ -238,8 +241,7 @@ class _Waves:
         if self.run is None:
             return self.sea.wave_shape(self.t + frac, self.ph)
         phi = 2.0 * math.pi * ((self.t + frac) - self.ph) / self.sea.wave_period_s
-        r = self.sea.wave_skew
-        per_run = np.array([(math.cos(p) + r * math.cos(2.0 * p)) / (1.0 + r) for p in phi.tolist()])
+        per_run = np.array([self.sea.shape_at_phase(p) for p in phi.tolist()])
         return per_run[self.run]
 
     def crest(self, k: int):

@@ -669,13 +669,13 @@ class ScriptedPolicy:
     def _safe_ground(self, objs: np.ndarray, safe_m: float) -> SafeGround:
         """Distances to safe ground from everywhere (kept until the objects change: robots park
         and hold against the same finds many times)."""
-        key = (objs.tobytes(), safe_m)
-        if self._safe_cache is None or self._safe_cache[0] != key:
+        ground = self._safe_cached(objs, safe_m)
+        if ground is None:
             if self._graph is None:
                 self._graph = free_cell_graph(self.env.plan.costmap)
             ground = SafeGround(self.env.plan.costmap, self._graph, objs, safe_m, dry=self.env.dry_ground)
-            self._safe_cache = (key, ground)
-        return self._safe_cache[1]
+            self._safe_cache = ((objs.tobytes(), safe_m), ground)
+        return ground
 
     def _return(self) -> None:
         env = self.env

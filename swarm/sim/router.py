@@ -68,13 +68,9 @@ class Router:
     def reachable_many(self, xy: np.ndarray) -> np.ndarray:
         """`reachable` of each point of `xy` (k, 2), in one pass."""
         out = np.asarray(xy, dtype=np.float64).reshape(-1, 2).copy()
-        blocked = ~np.asarray(self.cm.is_free(out[:, 0], out[:, 1]), bool)
-        if blocked.any():
-            r, c = self.cm.cell_of(out[blocked, 0], out[blocked, 1])
-            land = self.cm.reason[r, c] != NO_TRACTION  # open water stays: the robot swims there
-            x, y = self.cm.center_of(self._near_r[r[land], c[land]], self._near_c[r[land], c[land]])
-            idx = np.flatnonzero(blocked)[land]
-            out[idx, 0], out[idx, 1] = x, y
+        r, c = self.cm.cell_of(out[:, 0], out[:, 1])
+        land = self.cm.reason[r, c] != NO_TRACTION  # open water stays: the robot swims there
+        out[land] = self.snap_many(out[land])
         return out
 
     def stitch(self, waypoints: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -21,6 +21,7 @@ import math
 import numpy as np
 
 from swarm.planning.detection import inverse_cube_look
+from swarm.sim.comms import sorted_unique
 from swarm.sim.sensing import _NEIGHBOUR_BINS, DENSE_PAIRS, SCREEN_MARGIN_M, Detection, MineSensor
 
 _BIN_OFFSET = 1 << 21
@@ -89,8 +90,7 @@ class SensorBatch:
                     keys = self._bin_keys(around, b)
             self._per_run[b] = keys
         self._dirty[:] = False
-        keys = np.sort(np.concatenate(self._per_run))  # np.unique's hash table is slower here
-        self._keys = keys[np.concatenate(([True], keys[1:] != keys[:-1]))] if len(keys) else keys
+        self._keys = sorted_unique(np.concatenate(self._per_run))
 
     def step(
         self,
