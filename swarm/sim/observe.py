@@ -10,6 +10,9 @@ numbers are the same for a run whether it is observed alone (`SwarmEnv`, B = 1) 
 
 from __future__ import annotations
 
+import math
+
+import numba
 import numpy as np
 from scipy.spatial import cKDTree
 
@@ -62,72 +65,25 @@ class Observer:
     def observe(self, world, runs: list[int]) -> np.ndarray:
         """(len(runs), n, obs_dim) float32: every robot's observation in runs `runs` now."""
         n, lay, r = self.n, self.layout, len(runs)
-        every = runs == list(range(world.B))
-
-        def pick(a: np.ndarray) -> np.ndarray:
-            a = a if every else a[runs]
-            return a.reshape(r * n, *a.shape[2:])
-
-        m = r * n
-        out = np.zeros((m, lay.size), np.float32)
+        out = np.zeros((r * n, lay.size), np.float32)
         sl = lay.slices
-        s = pick(world.robot_state)
-        heading = s[:, 2]
-        c, si = np.cos(heading), np.sin(heading)
-        own = out[:, sl["own"]]
-        own[:, 0:2] = s[:, :2]
-        own[:, 2] = c
-        own[:, 3] = si
-        own[:, 4:7] = s[:, 3:6]
-        own[:, 7] = pick(world.energy_wh)
-        own[:, 8] = pick(world.inverted)
-        own[:, 9] = pick(world.submersion)
-        own[:, 10] = pick(world.slip)
-        np.clip(own[:, 7:8], 0.0, self.capacity_wh, out=own[:, 7:8])
-        own[:, 7] /= self.capacity_wh
-        np.clip(own[:, 10], 0.0, 1.0, out=own[:, 10])
-        own[np.arange(m), 11 + pick(world.phase)] = 1.0
-        # terrain patch in the body frame: one gather of (speed, elevation) per sample
+        on = world.alive & world.on_map
+        self._refresh_stale(world, runs, on[runs])
+        rows = (np.asarray(runs, dtype=np.intp)[:, None] * n + np.arange(n)).ravel()
+        bm = self.setup.beach
         fx, fy = self.patch_offsets
-        c, si = c[:, None], si[:, None]
-        px = s[:, 0:1] + c * fx - si * fy
-        py = s[:, 1:2] + si * fx + c * fy
-        patch = self.patch_grid[self.flat_cell(px, py)]  # (m, k*k, 2)
-        k = lay.patch_size
-        # the middle sample of an odd patch is the robot's own cell
-        mid = patch[:, (k * k) // 2, 1] if k % 2 else None
-        here = mid if mid is not None else self.patch_grid[self.flat_cell(s[:, 0], s[:, 1]), 1]
-        out[:, sl["patch_speed"]] = patch[:, :, 0]
-        np.clip(
-            patch[:, :, 1] - here[:, None],
-            -ELEVATION_CLIP_M,
-            ELEVATION_CLIP_M,
-            out=out[:, sl["patch_elevation"]],
-        )
-        links = out[:, sl["links"]]
-        hops = pick(world.source_hops)
-        links[:, 0] = pick(world.link_degree)
-        links[:, 1] = hops >= 0
-        links[:, 2] = hops
-        links[:, 3] = pick(world.isolated_s)
+        _fill(
+            out, rows, n, world.robot_state, world.energy_wh, world.inverted, world.submersion,
+            world.slip, world.phase, float(self.capacity_wh), fx, fy, self.patch_grid,
+            float(bm.origin_m[0]), float(bm.origin_m[1]), float(bm.cell_m), bm.shape[0], bm.shape[1],
+            world.link_degree, world.source_hops, world.isolated_s, world.role, world.command,
+            FOLLOW, RETURN, world.route_goal(), world.target_m, world.routes.progress(), world.marking,
+            self._tables, self._linked, on, sl["patch_speed"].start,
+            sl["neighbours"].start, sl["links"].start, sl["task"].start, len(ROLES),
+        )  # fmt: skip
         task = out[:, sl["task"]]
-        task[np.arange(m), pick(world.role)] = 1.0
         nr = len(ROLES)
-        command = pick(world.command)
-        goal_all = world.route_goal()
-        progress_all = world.routes.progress()
-        if not every:
-            rows = (np.asarray(runs)[:, None] * n + np.arange(n)).ravel()
-            goal_all, progress_all = goal_all[rows], progress_all[rows]
-        goal = np.where(((command == FOLLOW) | (command == RETURN))[:, None], goal_all, pick(world.target_m))
-        gb = to_body(goal - s[:, :2], heading)
-        task[:, nr : nr + 2] = gb
-        task[:, nr + 2] = np.hypot(gb[:, 0], gb[:, 1])
-        task[:, nr + 3] = progress_all
-        task[:, nr + 4] = pick(world.marking) >= 0
-        here = pick(world.alive & world.on_map).reshape(r, n)
-        self._observe_neighbours(world, runs, here, s, out[:, sl["neighbours"]])
-        self._observe_objects(world, runs, s, task[:, nr + 5 : nr + 7])
+        self._observe_objects(world, runs, task[:, nr + 5 : nr + 7])
         clearance = self.setup.clearance
         t_s = world.t_s[runs]
         task[:, nr + 7] = np.repeat(np.minimum(1.0, t_s / self.setup.time_limit_s), n)
@@ -159,40 +115,20 @@ class Observer:
         hit = keys[at] == query if len(keys) else np.zeros(len(query), bool)
         self._linked[b] = hit.reshape(self.n, k) & (table >= 0)
 
-    def _observe_neighbours(
-        self, world, runs: list[int], here: np.ndarray, state: np.ndarray, block: np.ndarray
-    ) -> None:
-        """Each robot's table neighbours at their current positions, every run at once: present,
-        body-frame offset, distance, radio link working (zero for robots not on the map).
-        `here` (r, n): on the map; `state` (r * n, 6); `block` (r * n, 5 k) is written."""
-        k = self.layout.neighbours
-        if k == 0:
+    def _refresh_stale(self, world, runs: list[int], here: np.ndarray) -> None:
+        """Refresh the neighbour tables of the runs whose radio updated or whose count of robots on
+        the map changed since their table was made. `here` (len(runs), n): on the map."""
+        if self.layout.neighbours == 0:
             return
-        n, r = self.n, len(runs)
         counts = np.count_nonzero(here, axis=1)
-        versions = np.fromiter((world.runs[b].links_version for b in runs), np.int64, r)
+        versions = np.fromiter((world.runs[b].links_version for b in runs), np.int64, len(runs))
         stale = (versions != self._table_version[runs]) | (counts != self._table_count[runs])
         for j in np.flatnonzero(stale).tolist():
             b = runs[j]
             self._refresh(world.runs[b], b, here[j])
             self._table_version[b], self._table_count[b] = versions[j], counts[j]
-        table = self._tables[runs].reshape(r * n, k)
-        valid = table >= 0
-        me = valid.any(axis=1) & here.ravel()
-        if not me.any():
-            return
-        other = np.maximum(table, 0) + (np.arange(r) * n).repeat(n)[:, None]  # rows of `state`
-        present = valid & here.ravel()[other] & me[:, None]
-        rel = to_body(state[other, :2] - state[:, None, :2], state[:, 2])
-        view = np.zeros((r * n, k, 5), np.float32)
-        view[..., 0] = present
-        view[..., 1:3] = rel
-        view[..., 3] = np.hypot(rel[..., 0], rel[..., 1])
-        view[..., 4] = self._linked[runs].reshape(r * n, k)
-        view[~present] = 0.0
-        block[me] = view[me].reshape(-1, 5 * k)
 
-    def _observe_objects(self, world, runs: list[int], state: np.ndarray, block: np.ndarray) -> None:
+    def _observe_objects(self, world, runs: list[int], block: np.ndarray) -> None:
         """Body-frame offset to the nearest object found and not yet marked, every run at once
         where the runs' objects are few (dense distances, padded), by a k-d tree where many."""
         n = self.n
@@ -207,11 +143,10 @@ class Observer:
             if count * n <= DENSE_NEAREST_PAIRS:
                 dense.append(j)
                 continue
-            rows = slice(j * n, (j + 1) * n)
             objs = run.objects_m[run.object_marker < 0]
-            xy = state[rows, :2]
+            xy = run.robot_state[:, :2]
             near = cKDTree(objs).query(xy)[1]
-            block[rows] = to_body(objs[near] - xy, state[rows, 2])
+            block[j * n : (j + 1) * n] = to_body(objs[near] - xy, run.robot_state[:, 2])
         if not dense:
             return
         width = max(len(world.runs[runs[j]].objects_m) for j in dense)
@@ -222,8 +157,94 @@ class Observer:
             objs[d, : len(run.objects_m)] = run.objects_m
             open_[d, : len(run.objects_m)] = run.object_marker < 0
         rows = (np.asarray(dense)[:, None] * n + np.arange(n)).ravel()
-        xy = state[rows, :2].reshape(len(dense), n, 2)
+        state = world.robot_state[np.asarray(runs)[dense]]
+        xy = state[:, :, :2]
         d2 = (xy[:, :, None, 0] - objs[:, None, :, 0]) ** 2 + (xy[:, :, None, 1] - objs[:, None, :, 1]) ** 2
         near = np.argmin(np.where(open_[:, None, :], d2, np.inf), axis=2)  # the first of equals, as alone
         target = np.take_along_axis(objs, near[..., None], axis=1)
-        block[rows] = to_body((target - xy).reshape(-1, 2), state[rows, 2])
+        block[rows] = to_body((target - xy).reshape(-1, 2), state[:, :, 2].ravel())
+
+
+@numba.njit(cache=True)
+def _fill(
+    out, rows, n, state, energy, inverted, submersion, slip, phase, capacity,
+    fx, fy, grid, origin_x, origin_y, cell_m, grid_rows, grid_cols,
+    degree, hops, isolated, role, command, follow, ret, goal, target, progress, marking,
+    tables, linked, here, patch_at, neighbours_at, links_at, task_at, n_roles,
+):  # fmt: skip
+    """Every column of rows `rows` of the batch (flat robot index b * n + i) but the nearest object
+    and the clock: one pass per robot, each number computed in numpy's order and precision (the
+    module docstring's promise: alone or batched, the same floats)."""
+    cap32 = np.float32(capacity)
+    k2 = fx.shape[0]
+    kn = tables.shape[2]
+    mid = k2 // 2 if k2 % 2 else -1
+    cells = np.empty(k2, np.intp)
+    for o in range(rows.shape[0]):
+        row = rows[o]
+        b, i = row // n, row % n
+        x, y, th = state[b, i, 0], state[b, i, 1], state[b, i, 2]
+        c, s = np.cos(th), np.sin(th)
+        line = out[o]
+        line[0], line[1], line[2], line[3] = x, y, c, s
+        line[4], line[5], line[6] = state[b, i, 3], state[b, i, 4], state[b, i, 5]
+        e = np.float32(energy[b, i])
+        line[7] = min(max(e, np.float32(0.0)), cap32) / cap32
+        line[8] = inverted[b, i]
+        line[9] = submersion[b, i]
+        line[10] = min(max(np.float32(slip[b, i]), np.float32(0.0)), np.float32(1.0))
+        line[11 + phase[b, i]] = 1.0
+        # the terrain patch in the body frame, one cell per sample
+        for q in range(k2):
+            px = x + c * fx[q] - s * fy[q]
+            py = y + s * fx[q] + c * fy[q]
+            cells[q] = _cell(px, py, origin_x, origin_y, cell_m, grid_rows, grid_cols)
+            line[patch_at + q] = grid[cells[q], 0]
+        if mid >= 0:
+            here_elev = grid[cells[mid], 1]
+        else:
+            here_elev = grid[_cell(x, y, origin_x, origin_y, cell_m, grid_rows, grid_cols), 1]
+        for q in range(k2):
+            d = grid[cells[q], 1] - here_elev
+            line[patch_at + k2 + q] = min(max(d, np.float32(-ELEVATION_CLIP_M)), np.float32(ELEVATION_CLIP_M))
+        # table neighbours present now, body-frame offset, distance, link working
+        if here[b, i]:
+            for j in range(kn):
+                other = tables[b, i, j]
+                if other < 0 or not here[b, other]:
+                    continue
+                dx = state[b, other, 0] - x
+                dy = state[b, other, 1] - y
+                fwd = c * dx + s * dy
+                left = c * dy - s * dx
+                at = neighbours_at + 5 * j
+                line[at] = 1.0
+                line[at + 1] = fwd
+                line[at + 2] = left
+                line[at + 3] = math.hypot(fwd, left)
+                line[at + 4] = linked[b, i, j]
+        h = hops[b, i]
+        line[links_at] = degree[b, i]
+        line[links_at + 1] = h >= 0
+        line[links_at + 2] = h
+        line[links_at + 3] = isolated[b, i]
+        line[task_at + role[b, i]] = 1.0
+        if command[b, i] == follow or command[b, i] == ret:
+            gx, gy = goal[row, 0] - x, goal[row, 1] - y
+        else:
+            gx, gy = target[b, i, 0] - x, target[b, i, 1] - y
+        fwd = c * gx + s * gy
+        left = c * gy - s * gx
+        line[task_at + n_roles] = fwd
+        line[task_at + n_roles + 1] = left
+        line[task_at + n_roles + 2] = math.hypot(fwd, left)
+        line[task_at + n_roles + 3] = progress[row]
+        line[task_at + n_roles + 4] = marking[b, i] >= 0
+
+
+@numba.njit(cache=True, inline="always")
+def _cell(x, y, origin_x, origin_y, cell_m, grid_rows, grid_cols):
+    """Row-major index of the cell under a point (`Observer.flat_cell`)."""
+    col = min(max(int((x - origin_x) / cell_m), 0), grid_cols - 1)
+    r = min(max(int((y - origin_y) / cell_m), 0), grid_rows - 1)
+    return r * grid_cols + col

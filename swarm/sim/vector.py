@@ -248,7 +248,7 @@ class SwarmVectorEnv:
         done = ~self._active.any(axis=1)
         infos: dict[str, Any] = {}
         if done.any():
-            final = self._finish_obs(obs, was_active)
+            final = self._finish_obs(obs, was_active, keep_raw=True)
             runs_done = np.flatnonzero(done)
             infos["final_obs"] = np.where(done[:, None, None], final, np.float32(0.0))
             infos["episode"] = {
@@ -285,10 +285,12 @@ class SwarmVectorEnv:
             raise SwarmError("sim: denormalize() needs vector_env(..., normalize_obs=True)")
         return np.asarray(obs, np.float32) * self._half + self._centre
 
-    def _finish_obs(self, raw: np.ndarray, rows: np.ndarray) -> np.ndarray:
-        """Scaled if asked, with the rows of robots out of the mission zero."""
-        out = self.normalize(raw) if self.normalize_obs else raw
-        return np.where(rows[..., None], out, np.float32(0.0))
+    def _finish_obs(self, raw: np.ndarray, rows: np.ndarray, keep_raw: bool = False) -> np.ndarray:
+        """Scaled if asked, with the rows of robots out of the mission zero; in place in `raw`
+        (the step's own fresh array) unless `keep_raw`."""
+        out = self.normalize(raw) if self.normalize_obs else raw.copy() if keep_raw else raw
+        out[~rows] = 0.0
+        return out
 
 
 def _batched(space: gymnasium.spaces.Box, lead: tuple[int, ...]) -> gymnasium.spaces.Box:
