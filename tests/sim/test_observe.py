@@ -96,3 +96,42 @@ def test_observing_some_runs_gives_their_rows_of_all(vec) -> None:
     every = vec.observer.observe(vec.world, list(range(RUNS)))
     some = vec.observer.observe(vec.world, [2, 0])
     np.testing.assert_array_equal(some, every[[2, 0]])
+
+
+@pytest.mark.parametrize("size", [3, 4], ids=["odd", "even"])
+def test_terrain_patch_samples_the_cells_around_each_robot_in_its_body_frame(tmp_path, size) -> None:
+    """Sample (i, j) lies (i - (k-1)/2) h forward and (j - (k-1)/2) h left of the robot; its speed
+    fraction and its elevation above the robot's own cell come from the cell under it (the nearest
+    edge cell off the map)."""
+    path = write_mission(tmp_path, "patch", swarm={"count": ROBOTS})
+    config = swarm.sim.SimConfig(patch_size=size, patch_spacing_m=1.5)
+    env = swarm.sim.vector_env(mission=path, num_envs=2, seed=5, config=config)
+    env.reset(seed=5)
+    rng = np.random.default_rng(1)
+    for _ in range(120):
+        obs, *_ = env.step(rng.uniform(-1.0, 1.0, (2, ROBOTS, 3)).astype(np.float32))
+    setup = env.observer.setup
+    beach, speed = setup.beach, setup.speed_grid
+    rows, cols = beach.shape
+
+    def cell(x: float, y: float) -> tuple[int, int]:
+        c = min(max(int((x - beach.origin_m[0]) / beach.cell_m), 0), cols - 1)
+        r = min(max(int((y - beach.origin_m[1]) / beach.cell_m), 0), rows - 1)
+        return r, c
+
+    first = _column(env, "speed_0_0")
+    elev = _column(env, "elevation_0_0_m")
+    checked = 0
+    for b in range(2):
+        for i in np.flatnonzero(env.world.in_agents[b]).tolist():
+            x, y, th = env.world.robot_state[b, i, :3]
+            own = beach.elevation_m[cell(x, y)]
+            for q in range(size * size):
+                fwd = (q // size - (size - 1) / 2) * 1.5
+                left = (q % size - (size - 1) / 2) * 1.5
+                rc = cell(x + np.cos(th) * fwd - np.sin(th) * left, y + np.sin(th) * fwd + np.cos(th) * left)
+                assert obs[b, i, first + q] == pytest.approx(speed[rc], abs=1e-6)
+                want = np.clip(np.float32(beach.elevation_m[rc]) - np.float32(own), -5.0, 5.0)
+                assert obs[b, i, elev + q] == pytest.approx(want, abs=1e-5)
+                checked += 1
+    assert checked >= 2 * ROBOTS * size * size // 2
