@@ -221,7 +221,7 @@ def _fill(
                 line[at] = 1.0
                 line[at + 1] = fwd
                 line[at + 2] = left
-                line[at + 3] = math.hypot(fwd, left)
+                line[at + 3] = math.sqrt(fwd * fwd + left * left)
                 line[at + 4] = linked[b, i, j]
         h = hops[b, i]
         line[links_at] = degree[b, i]
@@ -237,7 +237,7 @@ def _fill(
         left = c * gy - s * gx
         line[task_at + n_roles] = fwd
         line[task_at + n_roles + 1] = left
-        line[task_at + n_roles + 2] = math.hypot(fwd, left)
+        line[task_at + n_roles + 2] = math.sqrt(fwd * fwd + left * left)
         line[task_at + n_roles + 3] = progress[row]
         line[task_at + n_roles + 4] = marking[b, i] >= 0
 
