@@ -9,8 +9,9 @@ Every robot's observation is one float32 vector (`ObservationLayout.names` gives
 - a local patch of `patch_size` x `patch_size` samples `patch_spacing_m` apart in the robot's body
   frame (rows forward, columns left): the terrain's speed fraction (mode speed / fastest mode, 0 where
   impassable or no progress) and the elevation relative to the robot (m, clipped to +-`ELEVATION_CLIP_M`);
-- its `neighbours` nearest live robots: present flag, body-frame offset (m), distance (m), and
-  whether a radio link to it works;
+- its `neighbours` nearest robots on the map as of the last radio update (the table its radio
+  keeps; refreshed at once when a robot arrives on the map): present flag (0 for one lost since),
+  body-frame offset (m), distance (m), and whether a radio link to it works;
 - its links: number of working links, linked to the relay source, hops to it (-1 none), seconds
   since it last had any link;
 - its task: role one-hot (`ROLES`), body-frame offset and distance to its current goal, route

@@ -44,15 +44,16 @@ class Observer:
         #: (runs, n, k) each robot's table neighbours (-1: none) and whether the link to each works.
         self._tables = np.full((runs, self.n, k), -1, dtype=np.intp)
         self._linked = np.zeros((runs, self.n, k), bool)
-        #: (runs,) the radio update and the count of robots on the map each run's table is of.
+        #: (runs,) the radio update each run's table is of; (runs, n) who was on the map then.
         self._table_version = np.full(runs, -1, dtype=np.int64)
-        self._table_count = np.full(runs, -1, dtype=np.int64)
+        self._table_on = np.zeros((runs, self.n), bool)
 
     def reset_run(self, b: int) -> None:
         """Forget run b's neighbour tables (a new episode)."""
         self._tables[b] = -1
         self._linked[b] = False
         self._table_version[b] = -1
+        self._table_on[b] = False
 
     def flat_cell(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
         """Row-major index of the cell under each point (the nearest edge cell outside the map)."""
@@ -94,9 +95,10 @@ class Observer:
 
     # neighbours ---------------------------------------------------------------------------------------
     def _refresh(self, run, b: int, on: np.ndarray) -> None:
-        """Run b's neighbour table, (n, k) ids of each robot's k nearest live robots, as of the last
-        radio update or change in who is on the map (the table its radio keeps), and which of
-        those links work: fixed until the next radio update, which refreshes the table."""
+        """Run b's neighbour table, (n, k) ids of each robot's k nearest robots on the map, as of
+        the last radio update or arrival on the map (the table its radio keeps), and which of those
+        links work: fixed until the next radio update, which refreshes the table. A robot lost
+        since shows as absent (`_fill`) until then, as a radio's table loses a silent neighbour."""
         live = np.flatnonzero(on)
         k = self.layout.neighbours
         table = np.full((self.n, k), -1, dtype=np.intp)
@@ -116,17 +118,17 @@ class Observer:
         self._linked[b] = hit.reshape(self.n, k) & (table >= 0)
 
     def _refresh_stale(self, world, runs: list[int], here: np.ndarray) -> None:
-        """Refresh the neighbour tables of the runs whose radio updated or whose count of robots on
-        the map changed since their table was made. `here` (len(runs), n): on the map."""
+        """Refresh the neighbour tables of the runs whose radio updated or where a robot arrived on
+        the map since their table was made. `here` (len(runs), n): on the map now."""
         if self.layout.neighbours == 0:
             return
-        counts = np.count_nonzero(here, axis=1)
         versions = np.fromiter((world.runs[b].links_version for b in runs), np.int64, len(runs))
-        stale = (versions != self._table_version[runs]) | (counts != self._table_count[runs])
+        arrived = (here & ~self._table_on[runs]).any(axis=1)
+        stale = (versions != self._table_version[runs]) | arrived
         for j in np.flatnonzero(stale).tolist():
             b = runs[j]
             self._refresh(world.runs[b], b, here[j])
-            self._table_version[b], self._table_count[b] = versions[j], counts[j]
+            self._table_version[b], self._table_on[b] = versions[j], here[j]
 
     def _observe_objects(self, world, runs: list[int], block: np.ndarray) -> None:
         """Body-frame offset to the nearest object found and not yet marked, every run at once

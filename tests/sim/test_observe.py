@@ -135,3 +135,37 @@ def test_terrain_patch_samples_the_cells_around_each_robot_in_its_body_frame(tmp
                 assert obs[b, i, elev + q] == pytest.approx(want, abs=1e-5)
                 checked += 1
     assert checked >= 2 * ROBOTS * size * size // 2
+
+
+def test_a_lost_neighbour_shows_absent_until_the_radio_table_is_made_again(tmp_path) -> None:
+    """The table is each robot's k nearest robots on the map when it was made (at a radio update
+    or an arrival); a robot lost since is absent from it (present 0), not replaced, until the
+    table is made again, which leaves it out."""
+    path = write_mission(tmp_path, "lost", swarm={"count": ROBOTS})
+    env = swarm.sim.vector_env(mission=path, num_envs=1, seed=7)
+    env.reset(seed=7)
+    rng = np.random.default_rng(2)
+    for _ in range(150):
+        env.step(rng.uniform(-1.0, 1.0, (1, ROBOTS, 3)).astype(np.float32))
+    world, observer = env.world, env.observer
+    on = np.flatnonzero(world.alive[0] & world.on_map[0])
+    assert len(on) >= 4
+    observer.observe(world, [0])
+    table = observer._tables[0].copy()
+    lost = int(table[on[0], 0])
+    world.alive[0, lost] = False  # as a hazard takes it
+    obs = observer.observe(world, [0])
+    np.testing.assert_array_equal(observer._tables[0], table)
+    first = _column(env, "n0_present")
+    for i, slot in zip(*np.nonzero(table == lost), strict=True):
+        assert not obs[0, i, first + 5 * slot : first + 5 * slot + 5].any()
+    observer._table_version[0] = -1  # as the next radio update does
+    observer.observe(world, [0])
+    here = np.flatnonzero(world.alive[0] & world.on_map[0])
+    xy = world.robot_state[0, here, :2]
+    d = np.linalg.norm(xy[:, None] - xy[None], axis=2)
+    k = min(observer.layout.neighbours, len(here) - 1)
+    for row, i in enumerate(here):
+        want = here[np.argsort(d[row], kind="stable")[1 : k + 1]]
+        assert set(observer._tables[0, i, :k]) == set(want.tolist())
+    assert lost not in observer._tables[0]
