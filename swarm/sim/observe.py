@@ -24,6 +24,9 @@ from swarm.sim.setup import MissionSetup
 #: Up to this many point pairs, nearest neighbours come from a dense distance matrix (faster
 #: than building a k-d tree for a handful of objects).
 DENSE_NEAREST_PAIRS = 200_000
+#: Up to this many robots on the map, a run's neighbour table comes from every pair (fewer
+#: steps than building a k-d tree, and no Python call per run's robots).
+BRUTE_NEAREST_ROBOTS = 256
 
 
 class Observer:
@@ -103,19 +106,14 @@ class Observer:
         k = self.layout.neighbours
         table = np.full((self.n, k), -1, dtype=np.intp)
         q = min(k + 1, len(live))
-        if q >= 2:
-            xy = run.robot_state[live, :2]
-            _, idx = cKDTree(xy, balanced_tree=False, compact_nodes=False).query(xy, k=q)
+        xy = run.robot_state[:, :2]
+        if len(live) <= BRUTE_NEAREST_ROBOTS:
+            _nearest(xy, live, k, table)
+        elif q >= 2:
+            _, idx = cKDTree(xy[live], balanced_tree=False, compact_nodes=False).query(xy[live], k=q)
             table[live, : q - 1] = live[idx[:, 1:]]  # the first is itself
         self._tables[b] = table
-        # the working links as sorted keys row * N + col (CSR columns ascend within each row)
-        links, big_n = run.links, run.links.n_nodes
-        keys = np.repeat(np.arange(big_n, dtype=np.int64), np.diff(links.indptr)) * big_n + links.indices
-        query = np.repeat(np.arange(self.n), k).astype(np.int64) * big_n
-        query += np.maximum(table, 0).ravel()
-        at = np.minimum(np.searchsorted(keys, query), max(len(keys) - 1, 0))
-        hit = keys[at] == query if len(keys) else np.zeros(len(query), bool)
-        self._linked[b] = hit.reshape(self.n, k) & (table >= 0)
+        _linked_slots(run.links.indptr, run.links.indices, table, self._linked[b])
 
     def _refresh_stale(self, world, runs: list[int], here: np.ndarray) -> None:
         """Refresh the neighbour tables of the runs whose radio updated or where a robot arrived on
@@ -250,3 +248,52 @@ def _cell(x, y, origin_x, origin_y, cell_m, grid_rows, grid_cols):
     col = min(max(int((x - origin_x) / cell_m), 0), grid_cols - 1)
     r = min(max(int((y - origin_y) / cell_m), 0), grid_rows - 1)
     return r * grid_cols + col
+
+
+@numba.njit(cache=True)
+def _nearest(xy, live, k, table):
+    """Rows `live` of `table`: each robot's k nearest other robots of `live` by squared distance,
+    nearest first, ties to the lower id (every pair looked at)."""
+    m = live.shape[0]
+    best_d = np.empty(k)
+    best_j = np.empty(k, np.intp)
+    for a in range(m):
+        i = live[a]
+        count = 0
+        for c in range(m):
+            if c == a:
+                continue
+            j = live[c]
+            dx = xy[j, 0] - xy[i, 0]
+            dy = xy[j, 1] - xy[i, 1]
+            d = dx * dx + dy * dy
+            if count < k:
+                at = count
+                count += 1
+            elif d < best_d[k - 1]:
+                at = k - 1
+            else:
+                continue
+            while at > 0 and best_d[at - 1] > d:
+                best_d[at] = best_d[at - 1]
+                best_j[at] = best_j[at - 1]
+                at -= 1
+            best_d[at] = d
+            best_j[at] = j
+        for slot in range(count):
+            table[i, slot] = best_j[slot]
+
+
+@numba.njit(cache=True)
+def _linked_slots(indptr, indices, table, out):
+    """`out[i, s]`: whether robot i's link to its table neighbour `table[i, s]` works, from the
+    radio's links in CSR form (columns ascending within each row)."""
+    for i in range(table.shape[0]):
+        lo, hi = indptr[i], indptr[i + 1]
+        for slot in range(table.shape[1]):
+            j = table[i, slot]
+            if j < 0:
+                out[i, slot] = False
+                continue
+            at = lo + np.searchsorted(indices[lo:hi], j)
+            out[i, slot] = at < hi and indices[at] == j

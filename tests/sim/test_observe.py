@@ -169,3 +169,27 @@ def test_a_lost_neighbour_shows_absent_until_the_radio_table_is_made_again(tmp_p
         want = here[np.argsort(d[row], kind="stable")[1 : k + 1]]
         assert set(observer._tables[0, i, :k]) == set(want.tolist())
     assert lost not in observer._tables[0]
+
+
+def test_every_pair_table_is_the_k_d_tree_one() -> None:
+    """The small-run table (every pair looked at) names the same neighbours, nearest first, as
+    scipy's k-d tree; links come out of the CSR arrays as the dense matrix has them."""
+    from scipy.sparse import random as sparse_random
+    from scipy.spatial import cKDTree
+
+    rng = np.random.default_rng(4)
+    xy = rng.uniform(0.0, 50.0, (200, 2))
+    live = np.flatnonzero(rng.random(200) < 0.7)
+    k = 4
+    table = np.full((200, k), -1, dtype=np.intp)
+    observe._nearest(xy, live, k, table)
+    _, idx = cKDTree(xy[live]).query(xy[live], k=k + 1)
+    np.testing.assert_array_equal(table[live], live[idx[:, 1:]])
+    assert (table[np.setdiff1d(np.arange(200), live)] == -1).all()
+    links = sparse_random(200, 200, density=0.05, random_state=1, format="csr")
+    links.sort_indices()
+    linked = np.zeros((200, k), bool)
+    observe._linked_slots(links.indptr, links.indices, table, linked)
+    dense = links.toarray() != 0
+    want = np.where(table >= 0, dense[np.arange(200)[:, None], np.maximum(table, 0)], False)
+    np.testing.assert_array_equal(linked, want)
