@@ -21,9 +21,9 @@ from swarm.sim.layout import ELEVATION_CLIP_M, ROLES, ObservationLayout
 from swarm.sim.runview import FOLLOW, RETURN
 from swarm.sim.setup import MissionSetup
 
-#: Up to this many point pairs, nearest neighbours come from a dense distance matrix (faster
-#: than building a k-d tree for a handful of objects).
-DENSE_NEAREST_PAIRS = 200_000
+#: Up to this many robot-object pairs in a run, the nearest object comes from every pair (faster
+#: than building and querying a k-d tree).
+DENSE_NEAREST_PAIRS = 2_000_000
 #: Up to this many robots on the map, a run's neighbour table comes from every pair (fewer
 #: steps than building a k-d tree, and no Python call per run's robots).
 BRUTE_NEAREST_ROBOTS = 256
@@ -129,8 +129,8 @@ class Observer:
             self._table_version[b], self._table_on[b] = versions[j], here[j]
 
     def _observe_objects(self, world, runs: list[int], block: np.ndarray) -> None:
-        """Body-frame offset to the nearest object found and not yet marked, every run at once
-        where the runs' objects are few (dense distances, padded), by a k-d tree where many."""
+        """Body-frame offset to the nearest object found and not yet marked: every pair looked at
+        for the runs whose objects are few (all of them in one pass), a k-d tree where many."""
         n = self.n
         dense: list[int] = []
         for j, b in enumerate(runs):
@@ -149,20 +149,14 @@ class Observer:
             block[j * n : (j + 1) * n] = to_body(objs[near] - xy, run.robot_state[:, 2])
         if not dense:
             return
-        width = max(len(world.runs[runs[j]].objects_m) for j in dense)
-        objs = np.zeros((len(dense), width, 2))
-        open_ = np.zeros((len(dense), width), bool)
-        for d, j in enumerate(dense):
-            run = world.runs[runs[j]]
-            objs[d, : len(run.objects_m)] = run.objects_m
-            open_[d, : len(run.objects_m)] = run.object_marker < 0
-        rows = (np.asarray(dense)[:, None] * n + np.arange(n)).ravel()
-        state = world.robot_state[np.asarray(runs)[dense]]
-        xy = state[:, :, :2]
-        d2 = (xy[:, :, None, 0] - objs[:, None, :, 0]) ** 2 + (xy[:, :, None, 1] - objs[:, None, :, 1]) ** 2
-        near = np.argmin(np.where(open_[:, None, :], d2, np.inf), axis=2)  # the first of equals, as alone
-        target = np.take_along_axis(objs, near[..., None], axis=1)
-        block[rows] = to_body((target - xy).reshape(-1, 2), state[:, :, 2].ravel())
+        picked = [world.runs[runs[j]] for j in dense]
+        objs = np.concatenate([run.objects_m for run in picked])
+        open_ = np.concatenate([run.object_marker < 0 for run in picked])
+        starts = np.cumsum([0] + [len(run.objects_m) for run in picked])
+        _nearest_open(
+            world.robot_state, np.asarray(runs, np.intp)[dense], np.asarray(dense, np.intp) * n,
+            objs, open_, starts, block,
+        )  # fmt: skip
 
 
 @numba.njit(cache=True)
@@ -297,3 +291,28 @@ def _linked_slots(indptr, indices, table, out):
                 continue
             at = lo + np.searchsorted(indices[lo:hi], j)
             out[i, slot] = at < hi and indices[at] == j
+
+
+@numba.njit(cache=True)
+def _nearest_open(state, runs, rows, objs, open_, starts, block):
+    """Rows `rows[d]` onward of `block`: for every robot of run `runs[d]`, the body-frame offset
+    to the nearest of that run's objects `objs[starts[d]:starts[d + 1]]` still open (the first
+    of equals), looked at pair by pair; untouched where the run has none open."""
+    for d in range(runs.shape[0]):
+        b, lo, hi = runs[d], starts[d], starts[d + 1]
+        for i in range(state.shape[1]):
+            x, y = state[b, i, 0], state[b, i, 1]
+            best, at = np.inf, -1
+            for q in range(lo, hi):
+                if not open_[q]:
+                    continue
+                dx, dy = objs[q, 0] - x, objs[q, 1] - y
+                d2 = dx * dx + dy * dy
+                if d2 < best:
+                    best, at = d2, q
+            if at < 0:
+                continue
+            c, s = np.cos(state[b, i, 2]), np.sin(state[b, i, 2])
+            dx, dy = objs[at, 0] - x, objs[at, 1] - y
+            block[rows[d] + i, 0] = c * dx + s * dy
+            block[rows[d] + i, 1] = c * dy - s * dx
