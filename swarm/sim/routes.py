@@ -9,6 +9,9 @@ an array whose capacity doubles, so appending is amortized constant time); the o
 
 from __future__ import annotations
 
+import math
+
+import numba
 import numpy as np
 
 #: A waypoint counts as reached within this distance (m); the last one of a route, where the
@@ -111,23 +114,10 @@ class Routes:
         )
 
     def advance(self, xy: np.ndarray, mask: np.ndarray) -> None:
-        """Move the cursors of robots in `mask` past every waypoint they have reached."""
-        idx = np.flatnonzero(mask & (self.cursor < self.end))
-        for _ in range(4):  # a robot passes at most a few waypoints per step
-            if not len(idx):
-                return
-            cur = self.cursor[idx]
-            at = xy.take(idx, axis=0)
-            wp = self.points.take(cur, axis=0)
-            final = cur == self.end[idx] - 1
-            radius = np.where(final, FINAL_CAPTURE_M, CAPTURE_M)
-            hit = np.hypot(wp[:, 0] - at[:, 0], wp[:, 1] - at[:, 1]) < radius
-            along, cross, length, _ = self._leg_coordinates(idx, cur, wp, at)
-            hit |= ~final & (length > 0) & (along >= length) & (np.abs(cross) <= PASS_CROSS_TRACK_M)
-            idx = idx[hit]
-            self.cursor[idx] += 1
-            # only a robot that has just passed a waypoint can pass another: the rest stand as they did
-            idx = idx[self.cursor[idx] < self.end[idx]]
+        """Move the cursors of robots in `mask` past every waypoint they have reached (a few at
+        most per step): within the capture radius of it, or past the end of its leg and close to
+        the leg's line (`_leg_coordinates`; the final waypoint only by its radius)."""
+        _advance(self.points, self.start, self.end, self.cursor, xy, mask)
 
     def _leg_coordinates(
         self, idx: np.ndarray, cur_index: np.ndarray, cur: np.ndarray, xy: np.ndarray
@@ -275,3 +265,32 @@ def clear_of(points: np.ndarray, avoid: np.ndarray, radius_m: float) -> tuple[np
         steps[:, 1] = a[k] + s1[:, None] * u[k] + side[:, None] * normal
         out[where[k] + 1 : where[k + 1]] = steps.reshape(-1, 2)
     return out, where
+
+
+@numba.njit(cache=True)
+def _advance(points, start, end, cursor, xy, mask):
+    """`Routes.advance`, robot by robot, in `_leg_coordinates`'s arithmetic."""
+    for i in range(cursor.shape[0]):
+        if not mask[i]:
+            continue
+        x, y = xy[i, 0], xy[i, 1]
+        for _ in range(4):
+            cur = cursor[i]
+            if cur >= end[i]:
+                break
+            wx, wy = points[cur, 0], points[cur, 1]
+            final = cur == end[i] - 1
+            hit = math.hypot(wx - x, wy - y) < (FINAL_CAPTURE_M if final else CAPTURE_M)
+            if not hit and not final:
+                prev = cur - 1 if cur > start[i] else cur
+                px, py = points[prev, 0], points[prev, 1]
+                lx, ly = wx - px, wy - py
+                length = math.hypot(lx, ly)
+                ux, uy = lx / max(length, 1e-12), ly / max(length, 1e-12)
+                rx, ry = x - px, y - py
+                along = rx * ux + ry * uy
+                cross = ux * ry - uy * rx
+                hit = length > 0 and along >= length and abs(cross) <= PASS_CROSS_TRACK_M
+            if not hit:
+                break
+            cursor[i] += 1
