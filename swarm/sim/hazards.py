@@ -73,6 +73,7 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 from scipy.spatial import cKDTree
 from shapely.geometry.base import BaseGeometry
@@ -246,23 +247,32 @@ class _ContactScreen:
             if ix.tree is not None:
                 ix.grid = self.grid[self.offset[b] : self.offset[b] + len(ix.grid)]
 
-    def screen(self, xy: np.ndarray, mask: np.ndarray, run: np.ndarray) -> np.ndarray:
+    def screen(self, xy: np.ndarray, mask: np.ndarray, run: np.ndarray | None) -> np.ndarray:
         """Indices where `mask` of the robots in a flagged cell of their run's grid (`run` (n,))."""
         if self.empty:
             return np.empty(0, dtype=np.intp)
-        if len(self.nx) == 1:  # one run: its grid's numbers as scalars (`_ContactIndex`'s own screen)
-            nx, ny = int(self.nx[0]), int(self.ny[0])
-            c = (xy - self.lo[0]) * float(self.inv_cell[0])
-            x, y = c[:, 0], c[:, 1]
-            sel = np.flatnonzero(mask & (x >= 0.0) & (x < nx) & (y >= 0.0) & (y < ny))
-            return sel[self.grid[y[sel].astype(np.intp) * nx + x[sel].astype(np.intp)]]
-        c = (xy - self.lo[run]) * self.inv_cell[run][:, None]
-        x, y = c[:, 0], c[:, 1]
-        nx = self.nx[run]
-        # NaN positions (robots at sea, if the env leaves them so) compare False: never inside
-        sel = np.flatnonzero(mask & (x >= 0.0) & (x < nx) & (y >= 0.0) & (y < self.ny[run]))
-        flat = self.offset[run[sel]] + y[sel].astype(np.intp) * nx[sel] + x[sel].astype(np.intp)
-        return sel[self.grid[flat]]  # >= 0: the cast floors
+        if run is None or len(self.nx) == 1:
+            run = np.zeros(len(xy), np.intp)
+        return _screen(xy, mask, run, self.lo, self.inv_cell, self.nx, self.ny, self.offset, self.grid)
+
+
+@numba.njit(cache=True)
+def _screen(xy, mask, run, lo, inv_cell, nx, ny, offset, grid):
+    """`_ContactScreen.screen`, robot by robot: the grid cell is (xy - lo) * inv_cell floored (the
+    cast floors the non-negative), NaN positions (robots at sea, if the env leaves them so)
+    compare False, so never inside."""
+    out = np.empty(xy.shape[0], np.intp)
+    count = 0
+    for i in range(xy.shape[0]):
+        if not mask[i]:
+            continue
+        b = run[i]
+        x = (xy[i, 0] - lo[b, 0]) * inv_cell[b]
+        y = (xy[i, 1] - lo[b, 1]) * inv_cell[b]
+        if x >= 0.0 and x < nx[b] and y >= 0.0 and y < ny[b] and grid[offset[b] + int(y) * nx[b] + int(x)]:
+            out[count] = i
+            count += 1
+    return out[:count]
 
 
 class HazardModel:
@@ -435,7 +445,7 @@ class HazardModel:
         self._trigger_mines(inp.xy, on_map, u[:, _U_MINE], mine, run_of)
 
         # continuous: P(lost) = 1 - exp(-sum(lambda) dt); cause by lambda_c / sum(lambda)
-        total = rates.sum(axis=1)
+        total = rates[:, 0] + rates[:, 1] + rates[:, 2] + rates[:, 3]  # as rates.sum(axis=1), faster
         cont = u[:, _U_LOST] < -np.expm1(-total * inp.dt_s)
         which = np.zeros(size, dtype=np.intp)
         if cont.any():
