@@ -133,6 +133,8 @@ class World:
         self.t_s = np.zeros(b)
         self.steps = np.zeros(b, dtype=np.int64)
         self.wave_phase_s = np.zeros(b)
+        self.next_comms_s = np.zeros(b)  # each run's next radio update (s)
+        self._streams: dict[str, list] = {}  # each run's generator of a stream, by stream
         self.routes = Routes(b * n)
         self._sense_xy = np.full((b * n, 2), np.nan)  # each sensor's last positions (views)
         self._flat: dict[str, np.ndarray] = {}
@@ -186,6 +188,7 @@ class World:
         ss = np.random.SeedSequence(seed) if seed is not None or prev is None else prev.spawn(1)[0]
         run.seed_seq = ss
         run.rngs = dict(zip(STREAMS, (np.random.default_rng(c) for c in ss.spawn(len(STREAMS))), strict=True))
+        self._streams.clear()
         run.seed = seed
         run.router.calls = 0  # replanning seeds count from the episode's start
         self.t_s[b] = 0.0
@@ -243,7 +246,7 @@ class World:
         run.links = run.radio_net.update(state[:, :2], np.zeros(n, bool), run.rngs["radio"])
         self.link_degree[b] = run.links.degree
         self.source_hops[b] = run.links.source_hops
-        run.next_comms_s = 0.0
+        self.next_comms_s[b] = 0.0
         run.links_version = 0
         run.relay_up = None
         run.relay_was_up = False
@@ -296,6 +299,14 @@ class World:
         return wheels.reshape(self.B, self.n, 2), jet.reshape(self.B, self.n)
 
     # the step ---------------------------------------------------------------------------------------
+    def stream(self, name: str) -> list:
+        """Each run's generator of stream `name` (None where a run has none), the list kept until
+        a run is reset: the step asks for it every time."""
+        gens = self._streams.get(name)
+        if gens is None:
+            gens = self._streams[name] = [run.rngs.get(name) for run in self.runs]
+        return gens
+
     def advance(self, wheels: np.ndarray, jet: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """One step of every run still going, with wheel (B, n, 2) rad/s and jet (B, n) N commands.
         Returns (B, n) robots the world took out of the mission this step (lost, expended,
@@ -496,7 +507,7 @@ class World:
         sensing_now = self.alive & self.on_map & (self.phase >= BEACH)
         xy = self.flat("robot_state")[:, :2]
         flat_sensing = sensing_now.ravel() & np.isfinite(xy).all(axis=1)
-        rngs = [run.rngs.get("sensing") for run in self.runs]
+        rngs = self.stream("sensing")
         found = self.sensors.step(
             xy,
             self._sense_xy,
@@ -555,7 +566,8 @@ class World:
         changes."""
         s = self.setup
         cutoff = s.mission.hazards.comms.cutoff_s
-        due = [b for b in live if float(self.t_s[b]) + 1e-9 >= self.runs[b].next_comms_s]
+        live_ = np.asarray(live, dtype=np.intp)
+        due = live_[self.t_s[live_] + 1e-9 >= self.next_comms_s[live_]].tolist()
         if not due:
             return
         t = self.t_s[due]
@@ -565,11 +577,12 @@ class World:
         runs = [self.runs[b] for b in due]
         nets = [run.radio_net for run in runs]
         xy = self.robot_state[due, :, :2]
-        links = comms.update_nets(nets, xy, up, [run.rngs["radio"] for run in runs])
+        radio = self.stream("radio")
+        links = comms.update_nets(nets, xy, up, [radio[b] for b in due])
         self.link_degree[due] = [x.degree for x in links]
         self.source_hops[due] = [x.source_hops for x in links]
         for b, run, run_links in zip(due, runs, links, strict=True):
-            run.next_comms_s = float(self.t_s[b]) + self.comms_period_s
+            self.next_comms_s[b] = float(self.t_s[b]) + self.comms_period_s
             run.links = run_links
             run.links_version += 1
             if s.relay_task is not None:
@@ -627,7 +640,8 @@ class World:
         (a row per robot of those runs)."""
         assert self.hazard_model is not None
         n = self.n
-        losses = self.hazard_model.step(inp, [self.runs[b].rngs["hazards"] for b in runs], runs)
+        gens = self.stream("hazards")
+        losses = self.hazard_model.step(inp, gens if len(runs) == self.B else [gens[b] for b in runs], runs)
         radio_ok = self.radio_ok[runs].reshape(-1) & ~losses.radio_dropped
         self.radio_ok[runs] = radio_ok.reshape(len(runs), n)
         alive = self.alive[runs].reshape(-1)
