@@ -97,6 +97,10 @@ class MissionScore:
         self.beach_start_s: float | None = None
         self.beach_end_s = mission.phases.beach_end_s
         self.at_end = False
+        #: Without relay, surveillance or beacon criteria the score is a function of the counts
+        #: alone, so `score()` keeps its last value with the counts it had.
+        self._counts_only = relay_redundancy is None and not self.surveillance and not self.beacons
+        self._last: tuple[tuple[int, int, int], float] | None = None
 
     # updates -------------------------------------------------------------------------------------
     def update(self, t_s: float, dt_s: float, xy_ashore: np.ndarray, relay_up: bool | None) -> None:
@@ -142,6 +146,14 @@ class MissionScore:
         return out
 
     def score(self) -> float:
+        if self._counts_only:
+            counts = (self.detected, self.recovered, int(np.count_nonzero(self.zone_reached)))
+            if self._last is None or self._last[0] != counts:
+                self._last = (counts, self._score())
+            return self._last[1]
+        return self._score()
+
+    def _score(self) -> float:
         vals = self.values()
         if not vals:
             return 0.0
