@@ -120,7 +120,7 @@ class Observer:
         the map since their table was made. `here` (len(runs), n): on the map now."""
         if self.layout.neighbours == 0:
             return
-        versions = np.fromiter((world.runs[b].links_version for b in runs), np.int64, len(runs))
+        versions = world.links_version[runs]
         arrived = (here & ~self._table_on[runs]).any(axis=1)
         stale = (versions != self._table_version[runs]) | arrived
         for j in np.flatnonzero(stale).tolist():

@@ -74,6 +74,11 @@ class RunView:
         self.events: list[dict] = []
         self.end_reason: list[str | None] = [None] * self.n
 
+    @property
+    def links_version(self) -> int:
+        """How many radio updates the run has had (the world keeps the count for every run)."""
+        return int(self.world.links_version[self.b])
+
     # what the whole batch shares --------------------------------------------------------------------
     @property
     def mission(self):

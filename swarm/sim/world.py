@@ -134,6 +134,7 @@ class World:
         self.steps = np.zeros(b, dtype=np.int64)
         self.wave_phase_s = np.zeros(b)
         self.next_comms_s = np.zeros(b)  # each run's next radio update (s)
+        self.links_version = np.zeros(b, dtype=np.int64)  # each run's radio updates so far
         self._streams: dict[str, list] = {}  # each run's generator of a stream, by stream
         self.routes = Routes(b * n)
         self._sense_xy = np.full((b * n, 2), np.nan)  # each sensor's last positions (views)
@@ -247,7 +248,7 @@ class World:
         self.link_degree[b] = run.links.degree
         self.source_hops[b] = run.links.source_hops
         self.next_comms_s[b] = 0.0
-        run.links_version = 0
+        self.links_version[b] = 0
         run.relay_up = None
         run.relay_was_up = False
         redundancy = s.relay_task.redundancy if s.relay_task is not None else None
@@ -584,7 +585,7 @@ class World:
         for b, run, run_links in zip(due, runs, links, strict=True):
             self.next_comms_s[b] = float(self.t_s[b]) + self.comms_period_s
             run.links = run_links
-            run.links_version += 1
+            self.links_version[b] += 1
             if s.relay_task is not None:
                 now = bool(run.links.fixed_linked(s.relay_task.redundancy))
                 if now != bool(run.relay_up):
