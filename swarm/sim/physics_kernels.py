@@ -90,19 +90,19 @@ class Robot(NamedTuple):
         )
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _max(a: float, b: float) -> float:
     """np.maximum: NaN if either is."""
     return a if a >= b or a != a else b
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _min(a: float, b: float) -> float:
     """np.minimum: NaN if either is."""
     return a if a <= b or a != a else b
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _sign(a: float) -> float:
     """np.sign: 0 for either zero, NaN for NaN."""
     if a > 0.0:
@@ -112,7 +112,7 @@ def _sign(a: float) -> float:
     return 0.0 if a == 0.0 else a
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _cell(x: float, y: float, x0: float, y0: float, inv_cell: float, rows: int, cols: int) -> int:
     """`Physics._cells` of one point."""
     col = min(max(int((x - x0) * inv_cell), 0), cols - 1)
@@ -120,7 +120,7 @@ def _cell(x: float, y: float, x0: float, y0: float, inv_cell: float, rows: int, 
     return row * cols + col
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def wave_table(
     t_s: np.ndarray, phase_s: np.ndarray, period_s: float, skew: float, dt_s: float, n_sub: int
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -140,19 +140,19 @@ def wave_table(
     return shapes, crests
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _spin_m(turning_m: float, mu_lateral: float) -> float:
     """The patch spin radius turning_resistance_m / mu_lateral, as `SkidModel._ground`."""
     return turning_m / _max(mu_lateral, _MIN_MU)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _rolling(w: float, vx: float, reg: float) -> float:
     """A side's rolling speed, max(|w|, |vx|) + reg."""
     return _max(abs(w), abs(vx)) + reg
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _slips(
     i: int,
     u: float,
@@ -186,7 +186,7 @@ def _slips(
     slip[3, i], expo[3, i] = s, s / k
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def start(
     state: np.ndarray,
     cmd: np.ndarray,
@@ -223,7 +223,7 @@ def start(
         _slips(i, state[i, 3], state[i, 4], state[i, 5], w0, w1, spin_m, coef[c, SHEAR_SLIP], rb, slip, expo)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _velocities(
     i: int,
     u: float,
@@ -291,7 +291,7 @@ def _velocities(
     return u_new, v_new, r_new, traction0, traction1
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _wrench(
     u: float,
     v: float,
@@ -319,7 +319,7 @@ def _wrench(
     return force_x, force_y
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _slip_ratio(w: float, u: float, min_speed: float) -> float:
     """Longitudinal slip of the mean wheel (surface speed w) at body speed u, in [0, 1]."""
     aw = abs(w)
@@ -328,7 +328,7 @@ def _slip_ratio(w: float, u: float, min_speed: float) -> float:
     return 0.0 if aw < min_speed else ratio
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def substep(
     k: int,
     n_sub: int,
