@@ -245,6 +245,7 @@ class Physics:
         self.model = SkidModel(robot)
         self._fused = fused and self.model.centred
         self._robot_consts = kernels.Robot.of(self.model)
+        self._scratch: tuple[np.ndarray, ...] = ()
         modes = [library[name] for name in beach.terrain_classes]
         table = beach.terrain_table(library)
         #: (class, coefficient): one row per class; gathering rows and transposing is the fast way.
@@ -491,6 +492,19 @@ class Physics:
             obstacle_hit=obstacle,
         )
 
+    def _scratch_for(self, n: int) -> tuple[np.ndarray, ...]:
+        """The kernels' scratch arrays for n robots, kept from step to step: fresh ones would cost
+        their page faults every step at swarm sizes."""
+        if not self._scratch or self._scratch[0].shape[0] != n:
+            self._scratch = (
+                np.empty((n, 2)),
+                np.empty(n, dtype=np.intp),
+                np.empty((kernels.WORK_ROWS, n)),
+                np.empty((kernels.CONTACT_ROWS, n)),
+                np.empty((kernels.SOLVED_ROWS, n)),
+            )
+        return self._scratch
+
     def _run_fused(
         self,
         state: np.ndarray,
@@ -511,21 +525,21 @@ class Physics:
         act = np.ones(n, dtype=bool) if active is None else np.ascontiguousarray(active)
         run_of = np.zeros(n, dtype=np.intp) if run is None else np.ascontiguousarray(run, dtype=np.intp)
         s = np.array(state, order="C")  # a copy: the input is not modified
-        omega = np.empty((n, 2))
-        cell = np.empty(n, dtype=np.intp)
         cls = np.empty(n, dtype=np.intp)
-        slip = np.empty((4, n))
-        expo = np.empty((4, n))
+        omega, cell, work, contacts, solved = self._scratch_for(n)
         out = np.zeros((6, n))
         flags = np.zeros((2, n), dtype=bool)
         obstacle = np.full(n, -1, dtype=np.intp)
         grid = (self._x0, self._y0, self._inv_cell, self._rows, self._cols)
         coef, robot = self._class_coef, self._robot_consts
         cmd, inverted = np.ascontiguousarray(cmd), np.ascontiguousarray(inverted)
-        kernels.start(s, cmd, inverted, act, coef, self._terrain, grid, robot, omega, cell, cls, slip, expo)
+        kernels.start(
+            s, cmd, inverted, act, coef, self._terrain, grid, robot, omega, cell, cls, work, contacts
+        )
         jet_w = jet_power_w(thrust)
         for k in range(n_sub):
-            np.expm1(expo, out=expo)
+            exponents = contacts[kernels.EXPONENTS]
+            np.expm1(exponents, out=exponents)
             kernels.substep(
                 k,
                 n_sub,
@@ -537,8 +551,6 @@ class Physics:
                 run_of,
                 cell,
                 cls,
-                slip,
-                expo,
                 coef,
                 self._props,
                 self._terrain,
@@ -549,6 +561,9 @@ class Physics:
                 SLIP_MIN_SPEED_MPS,
                 jet_w,
                 1.0 / ETA_DRIVE,
+                work,
+                contacts,
+                solved,
                 out,
                 flags,
                 obstacle,

@@ -45,6 +45,17 @@ if tuple(COEFFICIENTS) != (
 # Columns of the per-cell table.
 SLOPE_FX, SLOPE_FY, LOAD, CURRENT_X, WAVE_X, WAVE_Y, SURF = range(7)
 
+# Rows of the scratch arrays the passes of a substep hand on, robots along the rows: `work` (each
+# robot's inputs to the vectorized passes), `contacts` (the contacts' combined slips, then their
+# exponents, expm1 in place between kernels; contact-major as the numpy path's (side, axle, robot)
+# array) and `solved` (the new velocities and the sides' traction).
+_U, _V, _R, _W0, _W1, _TURNING, _MU_LAT, _SHEAR, _MU_PEAK, _LOAD_N, _ROLL, _DRAG, _FX, _FY = range(14)
+WORK_ROWS = 14
+SLIPS, EXPONENTS = slice(0, 4), slice(4, 8)
+CONTACT_ROWS = 8
+_U_NEW, _V_NEW, _R_NEW, _TRACTION0, _TRACTION1 = range(5)
+SOLVED_ROWS = 5
+
 # Rows of `substep`'s float results and bool flags.
 OUT_DISTANCE, OUT_SLIP, OUT_JET, OUT_HIT_HEIGHT, OUT_POWER, OUT_SUBMERSION = range(6)
 FLAG_HIT, FLAG_SURF = range(2)
@@ -153,37 +164,43 @@ def _rolling(w: float, vx: float, reg: float) -> float:
 
 
 @njit(cache=True, error_model="numpy")
-def _slips(
-    i: int,
-    u: float,
-    v: float,
-    r: float,
-    w0: float,
-    w1: float,
-    spin_m: float,
-    shear: float,
-    rb: Robot,
-    slip,
-    expo,
+def _contact_inputs(
+    i: int, u: float, v: float, r: float, o0: float, o1: float, c: int, coef: np.ndarray, rb: Robot, work
 ) -> None:
-    """`SkidModel._contacts` up to the combined slips: robot i's slip of each contact (side, axle)
-    into `slip`, and its Janosi-Hanamoto exponent slip / -shear_slip into `expo`."""
-    vx0, vx1 = u - rb.y_left * r, u - rb.y_right * r
-    vy0, vy1 = v + rb.x_front * r, v + rb.x_rear * r
-    roll0, roll1 = _rolling(w0, vx0, rb.reg), _rolling(w1, vx1, rb.reg)
-    sx0, sx1 = vx0 - w0, vx1 - w1
-    spin = spin_m * r
-    a0, a1 = sx0 * sx0 + spin * spin, sx1 * sx1 + spin * spin
-    b0, b1 = vy0 * vy0, vy1 * vy1
-    k = -shear
-    s = _max(math.sqrt(a0 + b0) / roll0, _MIN_SLIP)
-    slip[0, i], expo[0, i] = s, s / k
-    s = _max(math.sqrt(a0 + b1) / roll0, _MIN_SLIP)
-    slip[1, i], expo[1, i] = s, s / k
-    s = _max(math.sqrt(a1 + b0) / roll1, _MIN_SLIP)
-    slip[2, i], expo[2, i] = s, s / k
-    s = _max(math.sqrt(a1 + b1) / roll1, _MIN_SLIP)
-    slip[3, i], expo[3, i] = s, s / k
+    """Robot i's velocities, wheel surface speeds and class-c coefficients into `work`, for
+    `_slips_pass` and `_velocities_pass`."""
+    surface = rb.wheel_radius_m * coef[c, RADIUS_SCALE]
+    work[_U, i], work[_V, i], work[_R, i] = u, v, r
+    work[_W0, i], work[_W1, i] = o0 * surface, o1 * surface
+    work[_TURNING, i], work[_MU_LAT, i], work[_SHEAR, i] = (
+        coef[c, TURNING_M],
+        coef[c, MU_LATERAL],
+        coef[c, SHEAR_SLIP],
+    )
+
+
+@njit(cache=True, error_model="numpy")
+def _slips_pass(work: np.ndarray, rb: Robot, contacts: np.ndarray) -> None:
+    """`SkidModel._contacts` up to the combined slips, for every row of `work` (no gathers, no
+    branches: the loop vectorizes): each contact's slip (side, axle) and its Janosi-Hanamoto
+    exponent slip / -shear_slip into `contacts`."""
+    y_left, y_right, x_front, x_rear, reg = rb.y_left, rb.y_right, rb.x_front, rb.x_rear, rb.reg
+    for i in range(work.shape[1]):
+        u, v, r, w0, w1 = work[_U, i], work[_V, i], work[_R, i], work[_W0, i], work[_W1, i]
+        vx0, vx1 = u - y_left * r, u - y_right * r
+        vy0, vy1 = v + x_front * r, v + x_rear * r
+        roll0, roll1 = _rolling(w0, vx0, reg), _rolling(w1, vx1, reg)
+        sx0, sx1 = vx0 - w0, vx1 - w1
+        spin = _spin_m(work[_TURNING, i], work[_MU_LAT, i]) * r
+        a0, a1 = sx0 * sx0 + spin * spin, sx1 * sx1 + spin * spin
+        b0, b1 = vy0 * vy0, vy1 * vy1
+        s00 = _max(math.sqrt(a0 + b0) / roll0, _MIN_SLIP)
+        s01 = _max(math.sqrt(a0 + b1) / roll0, _MIN_SLIP)
+        s10 = _max(math.sqrt(a1 + b0) / roll1, _MIN_SLIP)
+        s11 = _max(math.sqrt(a1 + b1) / roll1, _MIN_SLIP)
+        k = -work[_SHEAR, i]
+        contacts[0, i], contacts[1, i], contacts[2, i], contacts[3, i] = s00, s01, s10, s11
+        contacts[4, i], contacts[5, i], contacts[6, i], contacts[7, i] = s00 / k, s01 / k, s10 / k, s11 / k
 
 
 @njit(cache=True, error_model="numpy")
@@ -199,96 +216,30 @@ def start(
     omega: np.ndarray,
     cell: np.ndarray,
     cls: np.ndarray,
-    slip: np.ndarray,
-    expo: np.ndarray,
+    work: np.ndarray,
+    contacts: np.ndarray,
 ) -> None:
     """Before the first substep: the wheel speeds (an inverted robot's sides swapped and reversed),
-    each robot's cell and class (-1 inactive), and the first substep's slips and exponents (0
-    inactive). `grid` is (x0, y0, 1 / cell size, rows, cols)."""
+    each robot's cell and class (-1 inactive), and the first substep's slips and exponents (for
+    the inactive, those of a robot at rest with zero coefficients: finite). `grid` is (x0, y0,
+    1 / cell size, rows, cols)."""
     for i in range(state.shape[0]):
         if not active[i]:
             cls[i] = -1
-            expo[0, i] = expo[1, i] = expo[2, i] = expo[3, i] = 0.0
+            for row in range(WORK_ROWS):
+                work[row, i] = 0.0
+            work[_SHEAR, i] = 1.0
             continue
         if inverted[i]:
             omega[i, 0], omega[i, 1] = -cmd[i, 1], -cmd[i, 0]
         else:
             omega[i, 0], omega[i, 1] = cmd[i, 0], cmd[i, 1]
         here = _cell(state[i, 0], state[i, 1], *grid)
-        c = terrain[here]
-        cell[i], cls[i] = here, c
-        surface = rb.wheel_radius_m * coef[c, RADIUS_SCALE]
-        w0, w1 = omega[i, 0] * surface, omega[i, 1] * surface
-        spin_m = _spin_m(coef[c, TURNING_M], coef[c, MU_LATERAL])
-        _slips(i, state[i, 3], state[i, 4], state[i, 5], w0, w1, spin_m, coef[c, SHEAR_SLIP], rb, slip, expo)
-
-
-@njit(cache=True, error_model="numpy")
-def _velocities(
-    i: int,
-    u: float,
-    v: float,
-    r: float,
-    w0: float,
-    w1: float,
-    coef: np.ndarray,
-    c: int,
-    load_scale: float,
-    force_x: float,
-    force_y: float,
-    slip: np.ndarray,
-    expm1: np.ndarray,
-    h: float,
-    rb: Robot,
-) -> tuple[float, float, float, float, float]:
-    """`SkidModel.step`'s new velocities (u, v, r) and the sides' slip traction for robot i on
-    class c, from its contacts' slips and their expm1(slip / -shear_slip), under the external
-    force (Fx, Fy, 0)."""
-    mu_peak, mu_lat, buoy, drag = coef[c, MU_PEAK], coef[c, MU_LATERAL], coef[c, BUOY], coef[c, DRAG]
-    spin_m = _spin_m(coef[c, TURNING_M], mu_lat)
-    load_n = rb.load_n * ((1.0 - buoy) * load_scale)
-    roll = 2.0 * coef[c, ROLLING_RES] * load_n
-    vx0, vx1 = u - rb.y_left * r, u - rb.y_right * r
-    # secant slopes of the contacts (side, axle): expm1(-s/k) / s times -load / rolling speed
-    q0, q1 = -load_n / _rolling(w0, vx0, rb.reg), -load_n / _rolling(w1, vx1, rb.reg)
-    sec00, sec01 = expm1[0, i] / slip[0, i] * q0, expm1[1, i] / slip[1, i] * q0
-    sec10, sec11 = expm1[2, i] / slip[2, i] * q1, expm1[3, i] / slip[3, i] * q1
-    axle0, axle1 = sec00 + sec10, sec01 + sec11
-    kx_side0, kx_side1 = mu_peak * (sec00 + sec01), mu_peak * (sec10 + sec11)
-    ky0, ky1 = mu_lat * axle0, mu_lat * axle1
-    k_spin = mu_lat * spin_m * spin_m * (axle0 + axle1)
-    lin = drag * math.sqrt(u * u + v * v)
-    yaw = drag * rb.yaw_drag * abs(r)
-    reg = rb.reg
-    kx0 = kx_side0 + roll / math.sqrt(vx0 * vx0 + reg * reg)
-    kx1 = kx_side1 + roll / math.sqrt(vx1 * vx1 + reg * reg)
-    d0, d1 = kx_side0 * w0, kx_side1 * w1
-    # the 3x3 system of the linearly implicit step, eliminated in closed form
-    y_left, y_right, x_front, x_rear = rb.y_left, rb.y_right, rb.x_front, rb.x_rear
-    m, m_h, i_h = rb.mass_kg, rb.mass_kg / h, rb.inertia / h
-    a11 = m_h + (kx0 + kx1) + lin
-    a22 = m_h + (ky0 + ky1) + lin
-    a13 = -(y_left * kx0 + y_right * kx1)
-    a23 = x_front * ky0 + x_rear * ky1
-    a33 = (
-        i_h
-        + x_front * x_front * ky0
-        + x_rear * x_rear * ky1
-        + y_left * y_left * kx0
-        + y_right * y_right * kx1
-        + yaw
-        + k_spin
-    )
-    b1 = m * (u / h + v * r) + d0 + d1 + force_x
-    b2 = m * (v / h - u * r) + force_y
-    b3 = i_h * r - (y_left * d0 + y_right * d1) + 0.0
-    e1, e2 = a13 / a11, a23 / a22
-    r_new = (b3 - e1 * b1 - e2 * b2) / (a33 - e1 * a13 - e2 * a23)
-    u_new = (b1 - a13 * r_new) / a11
-    v_new = (b2 - a23 * r_new) / a22
-    traction0 = kx_side0 * (w0 - (u_new - y_left * r_new))
-    traction1 = kx_side1 * (w1 - (u_new - y_right * r_new))
-    return u_new, v_new, r_new, traction0, traction1
+        cell[i], cls[i] = here, terrain[here]
+        _contact_inputs(
+            i, state[i, 3], state[i, 4], state[i, 5], omega[i, 0], omega[i, 1], cls[i], coef, rb, work
+        )
+    _slips_pass(work, rb, contacts)
 
 
 @njit(cache=True, error_model="numpy")
@@ -320,6 +271,90 @@ def _wrench(
 
 
 @njit(cache=True, error_model="numpy")
+def _forces_pass(
+    k: int,
+    state: np.ndarray,
+    thrust: np.ndarray,
+    active: np.ndarray,
+    run: np.ndarray,
+    cell: np.ndarray,
+    cls: np.ndarray,
+    coef: np.ndarray,
+    props: np.ndarray,
+    shapes: np.ndarray,
+    rb: Robot,
+    work: np.ndarray,
+) -> None:
+    """The rest of `_velocities_pass`' inputs, gathered by cell and class: the external force,
+    the contacts' load and rolling resistance, mu_peak and the hull's drag."""
+    for i in range(state.shape[0]):
+        if not active[i]:
+            continue
+        here, c = cell[i], cls[i]
+        buoy, drag = coef[c, BUOY], coef[c, DRAG]
+        heading = state[i, 2]
+        cos_h, sin_h = math.cos(heading), math.sin(heading)
+        shape = shapes[k, run[i]]
+        fx, fy = _wrench(state[i, 3], state[i, 4], cos_h, sin_h, shape, props, here, buoy, drag, thrust[i])
+        load_n = rb.load_n * ((1.0 - buoy) * props[here, LOAD])
+        work[_FX, i], work[_FY, i], work[_DRAG, i] = fx, fy, drag
+        work[_MU_PEAK, i], work[_LOAD_N, i], work[_ROLL, i] = (
+            coef[c, MU_PEAK],
+            load_n,
+            2.0 * coef[c, ROLLING_RES] * load_n,
+        )
+
+
+@njit(cache=True, error_model="numpy")
+def _velocities_pass(h: float, work: np.ndarray, contacts: np.ndarray, rb: Robot, solved: np.ndarray) -> None:
+    """`SkidModel.step`'s new velocities (u, v, r) and the sides' slip traction, from the
+    contacts' slips and their expm1(slip / -shear_slip), for every row (vectorizes)."""
+    y_left, y_right, x_front, x_rear, reg = rb.y_left, rb.y_right, rb.x_front, rb.x_rear, rb.reg
+    m, m_h, i_h = rb.mass_kg, rb.mass_kg / h, rb.inertia / h
+    for i in range(work.shape[1]):
+        u, v, r, w0, w1 = work[_U, i], work[_V, i], work[_R, i], work[_W0, i], work[_W1, i]
+        mu_peak, mu_lat, drag, load_n = work[_MU_PEAK, i], work[_MU_LAT, i], work[_DRAG, i], work[_LOAD_N, i]
+        spin_m = _spin_m(work[_TURNING, i], mu_lat)
+        vx0, vx1 = u - y_left * r, u - y_right * r
+        # secant slopes of the contacts (side, axle): expm1(-s/k) / s times -load / rolling speed
+        q0, q1 = -load_n / _rolling(w0, vx0, reg), -load_n / _rolling(w1, vx1, reg)
+        sec00, sec01 = contacts[4, i] / contacts[0, i] * q0, contacts[5, i] / contacts[1, i] * q0
+        sec10, sec11 = contacts[6, i] / contacts[2, i] * q1, contacts[7, i] / contacts[3, i] * q1
+        axle0, axle1 = sec00 + sec10, sec01 + sec11
+        kx_side0, kx_side1 = mu_peak * (sec00 + sec01), mu_peak * (sec10 + sec11)
+        ky0, ky1 = mu_lat * axle0, mu_lat * axle1
+        k_spin = mu_lat * spin_m * spin_m * (axle0 + axle1)
+        lin = drag * math.sqrt(u * u + v * v)
+        yaw = drag * rb.yaw_drag * abs(r)
+        kx0 = kx_side0 + work[_ROLL, i] / math.sqrt(vx0 * vx0 + reg * reg)
+        kx1 = kx_side1 + work[_ROLL, i] / math.sqrt(vx1 * vx1 + reg * reg)
+        d0, d1 = kx_side0 * w0, kx_side1 * w1
+        # the 3x3 system of the linearly implicit step, eliminated in closed form
+        a11 = m_h + (kx0 + kx1) + lin
+        a22 = m_h + (ky0 + ky1) + lin
+        a13 = -(y_left * kx0 + y_right * kx1)
+        a23 = x_front * ky0 + x_rear * ky1
+        a33 = (
+            i_h
+            + x_front * x_front * ky0
+            + x_rear * x_rear * ky1
+            + y_left * y_left * kx0
+            + y_right * y_right * kx1
+            + yaw
+            + k_spin
+        )
+        b1 = m * (u / h + v * r) + d0 + d1 + work[_FX, i]
+        b2 = m * (v / h - u * r) + work[_FY, i]
+        b3 = i_h * r - (y_left * d0 + y_right * d1) + 0.0
+        e1, e2 = a13 / a11, a23 / a22
+        r_new = (b3 - e1 * b1 - e2 * b2) / (a33 - e1 * a13 - e2 * a23)
+        u_new = (b1 - a13 * r_new) / a11
+        solved[_U_NEW, i], solved[_V_NEW, i], solved[_R_NEW, i] = u_new, (b2 - a23 * r_new) / a22, r_new
+        solved[_TRACTION0, i] = kx_side0 * (w0 - (u_new - y_left * r_new))
+        solved[_TRACTION1, i] = kx_side1 * (w1 - (u_new - y_right * r_new))
+
+
+@njit(cache=True, error_model="numpy")
 def _slip_ratio(w: float, u: float, min_speed: float) -> float:
     """Longitudinal slip of the mean wheel (surface speed w) at body speed u, in [0, 1]."""
     aw = abs(w)
@@ -329,55 +364,42 @@ def _slip_ratio(w: float, u: float, min_speed: float) -> float:
 
 
 @njit(cache=True, error_model="numpy")
-def substep(
+def _move_pass(
     k: int,
     n_sub: int,
     h: float,
     state: np.ndarray,
     omega: np.ndarray,
-    thrust: np.ndarray,
     active: np.ndarray,
     run: np.ndarray,
     cell: np.ndarray,
     cls: np.ndarray,
-    slip: np.ndarray,
-    expo: np.ndarray,
     coef: np.ndarray,
     props: np.ndarray,
     terrain: np.ndarray,
     impassable: np.ndarray,
     grid: tuple[float, float, float, int, int],
     rb: Robot,
-    shapes: np.ndarray,
     crests: np.ndarray,
     slip_min_speed: float,
     jet_w: np.ndarray,
     drive_scale: float,
+    solved: np.ndarray,
+    work: np.ndarray,
     out: np.ndarray,
     flags: np.ndarray,
     obstacle: np.ndarray,
 ) -> None:
-    """Substep k of `h` seconds for every active robot, in place: `state`, `cell`, `cls`, the
-    results in `out` (rows `OUT_*`, sums until the last substep ends them), `flags` (`FLAG_*`)
-    and `obstacle`. `slip` and `expo` come in as the substep's slips and their expm1 and go out as
-    the next substep's slips and exponents. `jet_w` is the jet's power at full submersion,
-    `drive_scale` 1 / drive efficiency."""
+    """The pose update from the new velocities, the obstacle check, and what the substep adds to
+    the results; then the next substep's inputs to `_slips_pass` (the last ends the results)."""
     last = k == n_sub - 1
     for i in range(state.shape[0]):
         if not active[i]:
             continue
-        x, y, heading, u, v, r = state[i, 0], state[i, 1], state[i, 2], state[i, 3], state[i, 4], state[i, 5]
+        x, y, heading = state[i, 0], state[i, 1], state[i, 2]
+        u_new, v_new, r_new = solved[_U_NEW, i], solved[_V_NEW, i], solved[_R_NEW, i]
         here, c = cell[i], cls[i]
-        buoy, scale = coef[c, BUOY], coef[c, RADIUS_SCALE]
-        cos_h, sin_h = math.cos(heading), math.sin(heading)
-        shape = shapes[k, run[i]]
-        force_x, force_y = _wrench(u, v, cos_h, sin_h, shape, props, here, buoy, coef[c, DRAG], thrust[i])
-        surface = rb.wheel_radius_m * scale
-        o0, o1 = omega[i, 0], omega[i, 1]
-        w0, w1 = o0 * surface, o1 * surface
-        u_new, v_new, r_new, traction0, traction1 = _velocities(
-            i, u, v, r, w0, w1, coef, c, props[here, LOAD], force_x, force_y, slip, expo, h, rb
-        )
+        scale, surf = coef[c, RADIUS_SCALE], props[here, SURF]
         mid = heading + 0.5 * h * r_new
         cos_m, sin_m = math.cos(mid), math.sin(mid)
         x_new = x + h * (u_new * cos_m - v_new * sin_m)
@@ -393,22 +415,88 @@ def substep(
         cell[i], cls[i] = to, to_cls
         dx, dy = x_new - x, y_new - y
         out[OUT_DISTANCE, i] += math.sqrt(dx * dx + dy * dy)
+        o0, o1 = omega[i, 0], omega[i, 1]
         mean_w = 0.5 * (o0 + o1) * scale * rb.wheel_radius_m
         out[OUT_SLIP, i] += _slip_ratio(mean_w, u_new, slip_min_speed)
         out[OUT_JET, i] += coef[c, BUOY15]
-        surf = props[here, SURF]
         if crests[k, run[i]]:
             flags[FLAG_HIT, i] |= surf > 0.0
             out[OUT_HIT_HEIGHT, i] = _max(out[OUT_HIT_HEIGHT, i], surf)
         if last:  # wheel power from the last substep's slip traction (rolling resistance left out)
-            left = _max(traction0 * (o0 * surface), 0.0)
-            wheel = left + _max(traction1 * (o1 * surface), 0.0)
+            surface = rb.wheel_radius_m * scale
+            left = _max(solved[_TRACTION0, i] * (o0 * surface), 0.0)
+            wheel = left + _max(solved[_TRACTION1, i] * (o1 * surface), 0.0)
             out[OUT_POWER, i] = wheel * drive_scale + jet_w[i] * out[OUT_JET, i] * (1.0 / n_sub)
             out[OUT_SLIP, i] /= n_sub
-            out[OUT_SUBMERSION, i] = buoy
+            out[OUT_SUBMERSION, i] = coef[c, BUOY]
             flags[FLAG_SURF, i] = surf > 0.0
         else:
-            surface = rb.wheel_radius_m * coef[to_cls, RADIUS_SCALE]
-            spin_m = _spin_m(coef[to_cls, TURNING_M], coef[to_cls, MU_LATERAL])
-            shear = coef[to_cls, SHEAR_SLIP]
-            _slips(i, u_new, v_new, r_new, o0 * surface, o1 * surface, spin_m, shear, rb, slip, expo)
+            _contact_inputs(i, u_new, v_new, r_new, o0, o1, to_cls, coef, rb, work)
+
+
+@njit(cache=True, error_model="numpy")
+def substep(
+    k: int,
+    n_sub: int,
+    h: float,
+    state: np.ndarray,
+    omega: np.ndarray,
+    thrust: np.ndarray,
+    active: np.ndarray,
+    run: np.ndarray,
+    cell: np.ndarray,
+    cls: np.ndarray,
+    coef: np.ndarray,
+    props: np.ndarray,
+    terrain: np.ndarray,
+    impassable: np.ndarray,
+    grid: tuple[float, float, float, int, int],
+    rb: Robot,
+    shapes: np.ndarray,
+    crests: np.ndarray,
+    slip_min_speed: float,
+    jet_w: np.ndarray,
+    drive_scale: float,
+    work: np.ndarray,
+    contacts: np.ndarray,
+    solved: np.ndarray,
+    out: np.ndarray,
+    flags: np.ndarray,
+    obstacle: np.ndarray,
+) -> None:
+    """Substep k of `h` seconds for every active robot, in place: `state`, `cell`, `cls`, the
+    results in `out` (rows `OUT_*`, sums until the last substep ends them), `flags` (`FLAG_*`)
+    and `obstacle`. `contacts` comes in with the substep's slips and the expm1 of their exponents
+    and goes out with the next substep's (`work` and `solved` are scratch). `jet_w` is the jet's
+    power at full submersion, `drive_scale` 1 / drive efficiency. In passes, so that the gathers,
+    cosines and branches stay out of the loops that do the divisions and square roots."""
+    _forces_pass(k, state, thrust, active, run, cell, cls, coef, props, shapes, rb, work)
+    _velocities_pass(h, work, contacts, rb, solved)
+    _move_pass(
+        k,
+        n_sub,
+        h,
+        state,
+        omega,
+        active,
+        run,
+        cell,
+        cls,
+        coef,
+        props,
+        terrain,
+        impassable,
+        grid,
+        rb,
+        crests,
+        slip_min_speed,
+        jet_w,
+        drive_scale,
+        solved,
+        work,
+        out,
+        flags,
+        obstacle,
+    )
+    if k < n_sub - 1:
+        _slips_pass(work, rb, contacts)
