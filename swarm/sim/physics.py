@@ -533,8 +533,25 @@ class Physics:
         grid = (self._x0, self._y0, self._inv_cell, self._rows, self._cols)
         coef, robot = self._class_coef, self._robot_consts
         cmd, inverted = np.ascontiguousarray(cmd), np.ascontiguousarray(inverted)
+        props, shapes = self._props, waves[0]
         kernels.start(
-            s, cmd, inverted, act, coef, self._terrain, grid, robot, omega, cell, cls, work, contacts
+            s,
+            cmd,
+            inverted,
+            act,
+            run_of,
+            thrust,
+            coef,
+            props,
+            self._terrain,
+            grid,
+            robot,
+            shapes,
+            omega,
+            cell,
+            cls,
+            work,
+            contacts,
         )
         jet_w = jet_power_w(thrust)
         for k in range(n_sub):

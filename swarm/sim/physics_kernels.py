@@ -48,13 +48,14 @@ SLOPE_FX, SLOPE_FY, LOAD, CURRENT_X, WAVE_X, WAVE_Y, SURF = range(7)
 # Rows of the scratch arrays the passes of a substep hand on, robots along the rows: `work` (each
 # robot's inputs to the vectorized passes), `contacts` (the contacts' combined slips, then their
 # exponents, expm1 in place between kernels; contact-major as the numpy path's (side, axle, robot)
-# array) and `solved` (the new velocities and the sides' traction).
+# array) and `solved` (the new velocities and the sides' traction, then the move and the mean
+# wheel surface speed).
 _U, _V, _R, _W0, _W1, _TURNING, _MU_LAT, _SHEAR, _MU_PEAK, _LOAD_N, _ROLL, _DRAG, _FX, _FY = range(14)
 WORK_ROWS = 14
 SLIPS, EXPONENTS = slice(0, 4), slice(4, 8)
 CONTACT_ROWS = 8
-_U_NEW, _V_NEW, _R_NEW, _TRACTION0, _TRACTION1 = range(5)
-SOLVED_ROWS = 5
+_U_NEW, _V_NEW, _R_NEW, _TRACTION0, _TRACTION1, _DX, _DY, _MEAN_W = range(8)
+SOLVED_ROWS = 8
 
 # Rows of `substep`'s float results and bool flags.
 OUT_DISTANCE, OUT_SLIP, OUT_JET, OUT_HIT_HEIGHT, OUT_POWER, OUT_SUBMERSION = range(6)
@@ -164,18 +165,70 @@ def _rolling(w: float, vx: float, reg: float) -> float:
 
 
 @njit(cache=True, error_model="numpy")
-def _contact_inputs(
-    i: int, u: float, v: float, r: float, o0: float, o1: float, c: int, coef: np.ndarray, rb: Robot, work
+def _wrench(
+    u: float,
+    v: float,
+    cos_h: float,
+    sin_h: float,
+    shape: float,
+    props: np.ndarray,
+    here: int,
+    buoy: float,
+    drag: float,
+    thrust: float,
+) -> tuple[float, float]:
+    """Body-frame external force (Fx, Fy) in cell `here`: hull drag corrected to the water's
+    relative velocity, the jet, and the slope's pull on the weight the water leaves."""
+    wx = props[here, CURRENT_X] + shape * props[here, WAVE_X]
+    wy = shape * props[here, WAVE_Y]
+    ru = u - (wx * cos_h + wy * sin_h)
+    rv = v - (wy * cos_h - wx * sin_h)
+    speed = math.sqrt(u * u + v * v)
+    rel = math.sqrt(ru * ru + rv * rv)
+    support = 1.0 - buoy
+    gx, gy = support * props[here, SLOPE_FX], support * props[here, SLOPE_FY]
+    force_x = drag * (speed * u - rel * ru) + thrust * buoy + (gx * cos_h + gy * sin_h)
+    force_y = drag * (speed * v - rel * rv) + (gy * cos_h - gx * sin_h)
+    return force_x, force_y
+
+
+@njit(cache=True, error_model="numpy")
+def _inputs(
+    i: int,
+    heading: float,
+    u: float,
+    v: float,
+    r: float,
+    o0: float,
+    o1: float,
+    here: int,
+    c: int,
+    shape: float,
+    thrust: float,
+    coef: np.ndarray,
+    props: np.ndarray,
+    rb: Robot,
+    work: np.ndarray,
 ) -> None:
-    """Robot i's velocities, wheel surface speeds and class-c coefficients into `work`, for
-    `_slips_pass` and `_velocities_pass`."""
+    """Robot i's inputs to the vectorized passes of a substep it starts in cell `here` of class
+    c: its velocities and wheel surface speeds, the coefficients, the contacts' load and rolling
+    resistance, and the external force."""
     surface = rb.wheel_radius_m * coef[c, RADIUS_SCALE]
+    buoy, drag = coef[c, BUOY], coef[c, DRAG]
+    fx, fy = _wrench(u, v, math.cos(heading), math.sin(heading), shape, props, here, buoy, drag, thrust)
+    load_n = rb.load_n * ((1.0 - buoy) * props[here, LOAD])
     work[_U, i], work[_V, i], work[_R, i] = u, v, r
     work[_W0, i], work[_W1, i] = o0 * surface, o1 * surface
     work[_TURNING, i], work[_MU_LAT, i], work[_SHEAR, i] = (
         coef[c, TURNING_M],
         coef[c, MU_LATERAL],
         coef[c, SHEAR_SLIP],
+    )
+    work[_FX, i], work[_FY, i], work[_DRAG, i] = fx, fy, drag
+    work[_MU_PEAK, i], work[_LOAD_N, i], work[_ROLL, i] = (
+        coef[c, MU_PEAK],
+        load_n,
+        2.0 * coef[c, ROLLING_RES] * load_n,
     )
 
 
@@ -209,10 +262,14 @@ def start(
     cmd: np.ndarray,
     inverted: np.ndarray,
     active: np.ndarray,
+    run: np.ndarray,
+    thrust: np.ndarray,
     coef: np.ndarray,
+    props: np.ndarray,
     terrain: np.ndarray,
     grid: tuple[float, float, float, int, int],
     rb: Robot,
+    shapes: np.ndarray,
     omega: np.ndarray,
     cell: np.ndarray,
     cls: np.ndarray,
@@ -220,7 +277,7 @@ def start(
     contacts: np.ndarray,
 ) -> None:
     """Before the first substep: the wheel speeds (an inverted robot's sides swapped and reversed),
-    each robot's cell and class (-1 inactive), and the first substep's slips and exponents (for
+    each robot's cell and class (-1 inactive), and the first substep's inputs, slips and exponents (for
     the inactive, those of a robot at rest with zero coefficients: finite). `grid` is (x0, y0,
     1 / cell size, rows, cols)."""
     for i in range(state.shape[0]):
@@ -235,74 +292,14 @@ def start(
         else:
             omega[i, 0], omega[i, 1] = cmd[i, 0], cmd[i, 1]
         here = _cell(state[i, 0], state[i, 1], *grid)
-        cell[i], cls[i] = here, terrain[here]
-        _contact_inputs(
-            i, state[i, 3], state[i, 4], state[i, 5], omega[i, 0], omega[i, 1], cls[i], coef, rb, work
+        c = terrain[here]
+        cell[i], cls[i] = here, c
+        heading, u, v, r = state[i, 2], state[i, 3], state[i, 4], state[i, 5]
+        shape = shapes[0, run[i]]
+        _inputs(
+            i, heading, u, v, r, omega[i, 0], omega[i, 1], here, c, shape, thrust[i], coef, props, rb, work
         )
     _slips_pass(work, rb, contacts)
-
-
-@njit(cache=True, error_model="numpy")
-def _wrench(
-    u: float,
-    v: float,
-    cos_h: float,
-    sin_h: float,
-    shape: float,
-    props: np.ndarray,
-    here: int,
-    buoy: float,
-    drag: float,
-    thrust: float,
-) -> tuple[float, float]:
-    """Body-frame external force (Fx, Fy) in cell `here`: hull drag corrected to the water's
-    relative velocity, the jet, and the slope's pull on the weight the water leaves."""
-    wx = props[here, CURRENT_X] + shape * props[here, WAVE_X]
-    wy = shape * props[here, WAVE_Y]
-    ru = u - (wx * cos_h + wy * sin_h)
-    rv = v - (wy * cos_h - wx * sin_h)
-    speed = math.sqrt(u * u + v * v)
-    rel = math.sqrt(ru * ru + rv * rv)
-    support = 1.0 - buoy
-    gx, gy = support * props[here, SLOPE_FX], support * props[here, SLOPE_FY]
-    force_x = drag * (speed * u - rel * ru) + thrust * buoy + (gx * cos_h + gy * sin_h)
-    force_y = drag * (speed * v - rel * rv) + (gy * cos_h - gx * sin_h)
-    return force_x, force_y
-
-
-@njit(cache=True, error_model="numpy")
-def _forces_pass(
-    k: int,
-    state: np.ndarray,
-    thrust: np.ndarray,
-    active: np.ndarray,
-    run: np.ndarray,
-    cell: np.ndarray,
-    cls: np.ndarray,
-    coef: np.ndarray,
-    props: np.ndarray,
-    shapes: np.ndarray,
-    rb: Robot,
-    work: np.ndarray,
-) -> None:
-    """The rest of `_velocities_pass`' inputs, gathered by cell and class: the external force,
-    the contacts' load and rolling resistance, mu_peak and the hull's drag."""
-    for i in range(state.shape[0]):
-        if not active[i]:
-            continue
-        here, c = cell[i], cls[i]
-        buoy, drag = coef[c, BUOY], coef[c, DRAG]
-        heading = state[i, 2]
-        cos_h, sin_h = math.cos(heading), math.sin(heading)
-        shape = shapes[k, run[i]]
-        fx, fy = _wrench(state[i, 3], state[i, 4], cos_h, sin_h, shape, props, here, buoy, drag, thrust[i])
-        load_n = rb.load_n * ((1.0 - buoy) * props[here, LOAD])
-        work[_FX, i], work[_FY, i], work[_DRAG, i] = fx, fy, drag
-        work[_MU_PEAK, i], work[_LOAD_N, i], work[_ROLL, i] = (
-            coef[c, MU_PEAK],
-            load_n,
-            2.0 * coef[c, ROLLING_RES] * load_n,
-        )
 
 
 @njit(cache=True, error_model="numpy")
@@ -370,6 +367,7 @@ def _move_pass(
     h: float,
     state: np.ndarray,
     omega: np.ndarray,
+    thrust: np.ndarray,
     active: np.ndarray,
     run: np.ndarray,
     cell: np.ndarray,
@@ -380,8 +378,8 @@ def _move_pass(
     impassable: np.ndarray,
     grid: tuple[float, float, float, int, int],
     rb: Robot,
+    shapes: np.ndarray,
     crests: np.ndarray,
-    slip_min_speed: float,
     jet_w: np.ndarray,
     drive_scale: float,
     solved: np.ndarray,
@@ -391,10 +389,12 @@ def _move_pass(
     obstacle: np.ndarray,
 ) -> None:
     """The pose update from the new velocities, the obstacle check, and what the substep adds to
-    the results; then the next substep's inputs to `_slips_pass` (the last ends the results)."""
+    the results but distance and slip (`_tally_pass`); then the next substep's inputs (the last
+    substep ends the results)."""
     last = k == n_sub - 1
     for i in range(state.shape[0]):
-        if not active[i]:
+        if not active[i]:  # no move, no wheel speed: nothing for `_tally_pass` to add
+            solved[_U_NEW, i] = solved[_DX, i] = solved[_DY, i] = solved[_MEAN_W, i] = 0.0
             continue
         x, y, heading = state[i, 0], state[i, 1], state[i, 2]
         u_new, v_new, r_new = solved[_U_NEW, i], solved[_V_NEW, i], solved[_R_NEW, i]
@@ -410,14 +410,13 @@ def _move_pass(
             x_new, y_new, u_new, v_new = x, y, 0.0, 0.0
             obstacle[i] = to_cls
             to, to_cls = here, c
-        state[i, 0], state[i, 1], state[i, 2] = x_new, y_new, heading + h * r_new
+        heading_new = heading + h * r_new
+        state[i, 0], state[i, 1], state[i, 2] = x_new, y_new, heading_new
         state[i, 3], state[i, 4], state[i, 5] = u_new, v_new, r_new
         cell[i], cls[i] = to, to_cls
-        dx, dy = x_new - x, y_new - y
-        out[OUT_DISTANCE, i] += math.sqrt(dx * dx + dy * dy)
         o0, o1 = omega[i, 0], omega[i, 1]
-        mean_w = 0.5 * (o0 + o1) * scale * rb.wheel_radius_m
-        out[OUT_SLIP, i] += _slip_ratio(mean_w, u_new, slip_min_speed)
+        solved[_U_NEW, i], solved[_DX, i], solved[_DY, i] = u_new, x_new - x, y_new - y
+        solved[_MEAN_W, i] = 0.5 * (o0 + o1) * scale * rb.wheel_radius_m
         out[OUT_JET, i] += coef[c, BUOY15]
         if crests[k, run[i]]:
             flags[FLAG_HIT, i] |= surf > 0.0
@@ -427,11 +426,38 @@ def _move_pass(
             left = _max(solved[_TRACTION0, i] * (o0 * surface), 0.0)
             wheel = left + _max(solved[_TRACTION1, i] * (o1 * surface), 0.0)
             out[OUT_POWER, i] = wheel * drive_scale + jet_w[i] * out[OUT_JET, i] * (1.0 / n_sub)
-            out[OUT_SLIP, i] /= n_sub
             out[OUT_SUBMERSION, i] = coef[c, BUOY]
             flags[FLAG_SURF, i] = surf > 0.0
         else:
-            _contact_inputs(i, u_new, v_new, r_new, o0, o1, to_cls, coef, rb, work)
+            shape = shapes[k + 1, run[i]]
+            _inputs(
+                i,
+                heading_new,
+                u_new,
+                v_new,
+                r_new,
+                o0,
+                o1,
+                to,
+                to_cls,
+                shape,
+                thrust[i],
+                coef,
+                props,
+                rb,
+                work,
+            )
+
+
+@njit(cache=True, error_model="numpy")
+def _tally_pass(last: bool, n_sub: int, solved: np.ndarray, min_speed: float, out: np.ndarray) -> None:
+    """Each robot's distance and mean-wheel slip over the substep, added to the results (the last
+    substep makes the slip a mean); for every row, so the loop vectorizes."""
+    for i in range(solved.shape[1]):
+        dx, dy = solved[_DX, i], solved[_DY, i]
+        out[OUT_DISTANCE, i] += math.sqrt(dx * dx + dy * dy)
+        slip = out[OUT_SLIP, i] + _slip_ratio(solved[_MEAN_W, i], solved[_U_NEW, i], min_speed)
+        out[OUT_SLIP, i] = slip / n_sub if last else slip
 
 
 @njit(cache=True, error_model="numpy")
@@ -470,7 +496,6 @@ def substep(
     and goes out with the next substep's (`work` and `solved` are scratch). `jet_w` is the jet's
     power at full submersion, `drive_scale` 1 / drive efficiency. In passes, so that the gathers,
     cosines and branches stay out of the loops that do the divisions and square roots."""
-    _forces_pass(k, state, thrust, active, run, cell, cls, coef, props, shapes, rb, work)
     _velocities_pass(h, work, contacts, rb, solved)
     _move_pass(
         k,
@@ -478,6 +503,7 @@ def substep(
         h,
         state,
         omega,
+        thrust,
         active,
         run,
         cell,
@@ -488,8 +514,8 @@ def substep(
         impassable,
         grid,
         rb,
+        shapes,
         crests,
-        slip_min_speed,
         jet_w,
         drive_scale,
         solved,
@@ -498,5 +524,6 @@ def substep(
         flags,
         obstacle,
     )
+    _tally_pass(k == n_sub - 1, n_sub, solved, slip_min_speed, out)
     if k < n_sub - 1:
         _slips_pass(work, rb, contacts)
