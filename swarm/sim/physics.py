@@ -5,7 +5,9 @@ into equal substeps (0.1 s by default; `SkidModel.step` is linearly implicit, st
 at each substep re-reads, for every robot, the map cell under it: its terrain mode's coefficients,
 its slope, and the water's velocity there. Everything is vectorized over robots; the per-cell terms
 that never change (slope force, cos of the slope, surf mask, wave amplitude and direction) are
-computed once in `__init__` and gathered by flat cell index.
+computed once in `__init__` and gathered by flat cell index. The substeps run in the numba kernels
+of `swarm.sim.physics_kernels`, bit for bit the numpy code here (`Physics(fused=False)`), which
+stays as their reference and for robots the kernels do not cover.
 
 What is modelled, and where it comes from:
 
@@ -518,7 +520,7 @@ class Physics:
         run: np.ndarray | None,
     ) -> PhysicsStep:
         """`_run` in the kernels of `physics_kernels`, bit for bit, on all rows at once (inactive
-        rows skipped): one pass over the robots per substep, with numpy's expm1 in between."""
+        rows skipped): a kernel call per substep, with numpy's expm1 in between."""
         n = state.shape[0]
         h = dt_s / n_sub
         thrust = np.clip(jet, -self.jet_thrust_max_n, self.jet_thrust_max_n)
@@ -527,8 +529,8 @@ class Physics:
         s = np.array(state, order="C")  # a copy: the input is not modified
         cls = np.empty(n, dtype=np.intp)
         omega, cell, work, contacts, solved = self._scratch_for(n)
-        out = np.zeros((6, n))
-        flags = np.zeros((2, n), dtype=bool)
+        out = np.zeros((kernels.OUT_ROWS, n))
+        flags = np.zeros((kernels.FLAG_ROWS, n), dtype=bool)
         obstacle = np.full(n, -1, dtype=np.intp)
         grid = (self._x0, self._y0, self._inv_cell, self._rows, self._cols)
         coef, robot = self._class_coef, self._robot_consts
@@ -554,8 +556,8 @@ class Physics:
             contacts,
         )
         jet_w = jet_power_w(thrust)
+        exponents = contacts[kernels.EXPONENTS]
         for k in range(n_sub):
-            exponents = contacts[kernels.EXPONENTS]
             np.expm1(exponents, out=exponents)
             kernels.substep(
                 k,
@@ -569,7 +571,7 @@ class Physics:
                 cell,
                 cls,
                 coef,
-                self._props,
+                props,
                 self._terrain,
                 self._impassable,
                 grid,

@@ -2,7 +2,10 @@
 
 The numpy path (`SkidModel.step` and the world terms around it) makes ~100 array passes per
 substep with their temporaries: ~2 ms a substep at 10,000 robots, and mostly call overhead at 24.
-These kernels do the same arithmetic robot by robot in one pass over the state.
+These kernels do the same arithmetic robot by robot, in a few passes over the robots: the loops
+that gather by cell and class, take cosines and branch (obstacles, inactive robots) hand their
+rows to loops that only do arithmetic, which LLVM vectorizes (the divisions and square roots are
+most of the work). Numpy's error model: a zero divisor gives inf or NaN, as in numpy.
 
 Bit identity with the numpy path is by construction: every float operation is the same IEEE
 operation in the same order and grouping as the numpy expression it replaces (no fastmath, so no
@@ -10,10 +13,9 @@ reassociation or fused multiply-add), np.maximum / np.minimum / np.sign keep the
 and cos, sin and sqrt are libm's (or IEEE) on both sides. numpy's expm1 is its own SIMD code, which
 libm's differs from in the last bit for a few percent of arguments, so the Janosi-Hanamoto expm1
 stays in numpy: `start` and each `substep` end with the (next) substep's combined slips and their
-exponents slip / -k (`expo`, contact-major like the numpy path's (side, axle, robot) array), numpy
-takes their expm1 in place, and the next `substep` goes on from there. `SkidModel.step` stays the
-reference; the kernels cover its swarm case only (centre of mass centred, static loads), the one
-`Physics` takes them for.
+exponents slip / -k (rows `EXPONENTS` of `contacts`), numpy takes their expm1 in place, and the
+next `substep` goes on from there. `SkidModel.step` stays the reference; the kernels cover its
+swarm case only (centre of mass centred, static loads), the one `Physics` takes them for.
 """
 
 from __future__ import annotations
@@ -52,14 +54,16 @@ SLOPE_FX, SLOPE_FY, LOAD, CURRENT_X, WAVE_X, WAVE_Y, SURF = range(7)
 # wheel surface speed).
 _U, _V, _R, _W0, _W1, _TURNING, _MU_LAT, _SHEAR, _MU_PEAK, _LOAD_N, _ROLL, _DRAG, _FX, _FY = range(14)
 WORK_ROWS = 14
-SLIPS, EXPONENTS = slice(0, 4), slice(4, 8)
+EXPONENTS = slice(4, 8)  # after the four slips
 CONTACT_ROWS = 8
 _U_NEW, _V_NEW, _R_NEW, _TRACTION0, _TRACTION1, _DX, _DY, _MEAN_W = range(8)
 SOLVED_ROWS = 8
 
 # Rows of `substep`'s float results and bool flags.
 OUT_DISTANCE, OUT_SLIP, OUT_JET, OUT_HIT_HEIGHT, OUT_POWER, OUT_SUBMERSION = range(6)
+OUT_ROWS = 6
 FLAG_HIT, FLAG_SURF = range(2)
+FLAG_ROWS = 2
 
 
 #: Slip below which `SkidModel` holds the combined slip (keeps (1 - exp(-s/k)) / s finite).

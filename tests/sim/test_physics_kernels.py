@@ -5,7 +5,7 @@ obstacles, upright and inverted, lone runs and batches of runs, one substep or s
 from __future__ import annotations
 
 import importlib.resources
-from dataclasses import fields
+from dataclasses import fields, replace
 from pathlib import Path
 
 import numpy as np
@@ -138,3 +138,13 @@ def test_the_wave_table_is_the_sea_states_shape_and_crests() -> None:
         passed = sea.crests_by(t0 + dt * (k + 1) / n_sub, phase) > sea.crests_by(t0 + dt * k / n_sub, phase)
         assert crests[k, 0] == passed
     assert crests.sum() == 1
+
+
+def test_a_robot_the_kernels_do_not_cover_steps_with_the_numpy_path() -> None:
+    rng = np.random.default_rng(5)
+    bm = rough_beach(rng)
+    offset = replace(ROBOT, com_x_m=0.03)  # loads shared unevenly: not the kernels' case
+    physics = Physics(bm, default_library(), offset, SeaState(1.0, 8.0, 0.1), jet_thrust_max_n=30.0)
+    assert not physics._fused
+    state, wheels, jet, inverted = random_swarm(rng, 20, bm)
+    assert np.isfinite(physics.step(state, wheels, jet, inverted, 0.0, 0.5, 0.0).state).all()
