@@ -309,7 +309,10 @@ def start(
 @njit(cache=True, error_model="numpy")
 def _velocities_pass(h: float, work: np.ndarray, contacts: np.ndarray, rb: Robot, solved: np.ndarray) -> None:
     """`SkidModel.step`'s new velocities (u, v, r) and the sides' slip traction, from the
-    contacts' slips and their expm1(slip / -shear_slip), for every row (vectorizes)."""
+    contacts' slips and their expm1(slip / -shear_slip), for every row (vectorizes). LLVM checks
+    at run time that the rows it reads and writes do not overlap, and gives up vectorizing past a
+    few dozen rows: three more `work` rows read here (the external force's terms) made this pass
+    scalar and the step 40% slower, so check the assembly for vdivpd after adding any."""
     y_left, y_right, x_front, x_rear, reg = rb.y_left, rb.y_right, rb.x_front, rb.x_rear, rb.reg
     m, m_h, i_h = rb.mass_kg, rb.mass_kg / h, rb.inertia / h
     for i in range(work.shape[1]):
