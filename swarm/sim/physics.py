@@ -5,7 +5,9 @@ into equal substeps (0.1 s by default; `SkidModel.step` is linearly implicit, st
 at each substep re-reads, for every robot, the map cell under it: its terrain mode's coefficients,
 its slope, and the water's velocity there. Everything is vectorized over robots; the per-cell terms
 that never change (slope force, cos of the slope, surf mask, wave amplitude and direction) are
-computed once in `__init__` and gathered by flat cell index.
+computed once in `__init__` and gathered by flat cell index. The substeps run in the numba kernels
+of `swarm.sim.physics_kernels`, bit for bit the numpy code here (`Physics(fused=False)`), which
+stays as their reference and for robots the kernels do not cover.
 
 What is modelled, and where it comes from:
 
@@ -94,6 +96,21 @@ from scipy.ndimage import gaussian_filter
 from swarm.robot.params import GRAVITY_MPS2, RobotParams
 from swarm.robot.skid import HEADING, SkidModel, U, V, X, Y
 from swarm.robot.terrain import COEFFICIENTS, TerrainLibrary
+from swarm.sim import physics_kernels as kernels
+from swarm.sim.physics_kernels import (
+    BUOY,
+    BUOY15,
+    CREST_EPS,
+    CURRENT_X,
+    DRAG,
+    LOAD,
+    RADIUS_SCALE,
+    SLOPE_FX,
+    SLOPE_FY,
+    SURF,
+    WAVE_X,
+    WAVE_Y,
+)
 from swarm.world.beachmap import BeachMap
 from swarm.world.coastal import BREAKING_INDEX, surf_zone_mask
 
@@ -122,15 +139,6 @@ SHOREWARD_SMOOTHING_CELLS = 3.0
 _FLAT_GRADIENT = 1e-6
 #: Wheel surface speed below which slip is reported as 0, m/s.
 SLIP_MIN_SPEED_MPS = 0.05
-#: Relative slack on crest times, so a crest on a step boundary counts once whatever rounding.
-_CREST_EPS = 1e-9
-
-# rows of the per-cell property table
-_SLOPE_FX, _SLOPE_FY, _LOAD, _CURRENT_X, _WAVE_X, _WAVE_Y, _SURF = range(7)
-_BUOY = list(COEFFICIENTS).index("buoyancy_fraction")
-_DRAG = list(COEFFICIENTS).index("drag_n_s2_per_m2")
-_RADIUS = list(COEFFICIENTS).index("rolling_radius_scale")
-_BUOY15 = len(COEFFICIENTS)
 
 
 _JET_W_PER_N15 = 1.0 / math.sqrt(2.0 * SEAWATER_DENSITY_KGPM3 * JET_NOZZLE_AREA_M2) / ETA_JET
@@ -183,7 +191,7 @@ class SeaState:
 
     def crests_by(self, t_s: float, wave_phase_s: float) -> int:
         """Crests that have passed by time t (up to a constant): a crest lies in (a, b] iff this grows."""
-        return math.floor((t_s - wave_phase_s) / self.wave_period_s + _CREST_EPS)
+        return math.floor((t_s - wave_phase_s) / self.wave_period_s + CREST_EPS)
 
 
 @dataclass
@@ -213,50 +221,6 @@ def _per_robot(a, dtype, n: int) -> np.ndarray:
 _STEP_FIELDS = tuple(f.name for f in fields(PhysicsStep))
 
 
-class _Waves:
-    """The wave shape and crest passages of one step's substeps: one run (scalars), or a batch of
-    runs, each at its own time and wave phase. A batch computes every run's phase and crest count
-    with numpy, in the same operations as `SeaState.wave_shape` and `crests_by` (so the same
-    floats), and only the cosines with `math.cos`, run by run, as a lone run takes them; the per
-    run values are then spread to the robots by `run`."""
-
-    def __init__(self, sea: SeaState, t_s, wave_phase_s, run, dt_s: float, n_sub: int) -> None:
-        self.sea, self.dt_s, self.n_sub, self.run = sea, dt_s, n_sub, run
-        if run is None:
-            self.t, self.ph = float(t_s), float(wave_phase_s)
-            self.crests = sea.crests_by(t_s, wave_phase_s)
-        else:
-            self.t = np.asarray(t_s, dtype=np.float64)
-            self.ph = np.asarray(wave_phase_s, dtype=np.float64)
-            self.present = np.zeros(len(self.t), bool)  # the runs with a robot in this step
-            self.present[run] = True
-            self.crests = self._crests(0.0)
-
-    def _crests(self, frac: float) -> np.ndarray:
-        """`SeaState.crests_by` of every run at its time plus `frac` (floats holding integers)."""
-        return np.floor(((self.t + frac) - self.ph) / self.sea.wave_period_s + _CREST_EPS)
-
-    def shape(self, k: int):
-        frac = self.dt_s * k / self.n_sub
-        if self.run is None:
-            return self.sea.wave_shape(self.t + frac, self.ph)
-        phi = 2.0 * math.pi * ((self.t + frac) - self.ph) / self.sea.wave_period_s
-        per_run = np.array([self.sea.shape_at_phase(p) for p in phi.tolist()])
-        return per_run[self.run]
-
-    def crest(self, k: int):
-        """True / False (one run), or a bool per robot: a crest passed in substep k."""
-        frac = self.dt_s * (k + 1) / self.n_sub
-        if self.run is None:
-            nxt = self.sea.crests_by(self.t + frac, self.ph)
-            passed, self.crests = nxt > self.crests, nxt
-            return passed
-        nxt = self._crests(frac)
-        per_run = (nxt > self.crests) & self.present
-        self.crests = nxt
-        return per_run[self.run] if per_run.any() else False
-
-
 class Physics:
     """Vectorized world physics over one beach for one robot type."""
 
@@ -269,7 +233,10 @@ class Physics:
         *,
         jet_thrust_max_n: float,
         substep_s: float = 0.1,
+        fused: bool = True,
     ) -> None:
+        """`fused`: step with the numba kernels of `physics_kernels` when they cover the robot (its
+        centre of mass centred); False steps with the numpy path, the kernels' reference."""
         if not substep_s > 0.0:
             raise ValueError(f"substep_s must be > 0, got {substep_s}")
         if not jet_thrust_max_n >= 0.0:
@@ -278,6 +245,9 @@ class Physics:
         self.jet_thrust_max_n = float(jet_thrust_max_n)
         self.substep_s = float(substep_s)
         self.model = SkidModel(robot)
+        self._fused = fused and self.model.centred
+        self._robot_consts = kernels.Robot.of(self.model)
+        self._scratch: tuple[np.ndarray, ...] = ()
         modes = [library[name] for name in beach.terrain_classes]
         table = beach.terrain_table(library)
         #: (class, coefficient): one row per class; gathering rows and transposing is the fast way.
@@ -315,13 +285,13 @@ class Physics:
         height = np.minimum(sea.wave_height_m, BREAKING_INDEX * depth)
         amplitude = np.where(surf, 0.5 * height * np.sqrt(GRAVITY_MPS2 / depth), 0.0)
         props = np.empty((7, rows * cols))  # filled by property, stored by cell
-        props[_SLOPE_FX] = (-weight * d_dx * cos_slope).ravel()
-        props[_SLOPE_FY] = (-weight * d_dy * cos_slope).ravel()
-        props[_LOAD] = cos_slope.ravel()
-        props[_CURRENT_X] = np.where(surf, sea.longshore_current_mps, 0.0).ravel()
-        props[_WAVE_X] = (amplitude * self.shoreward[..., 0]).ravel()
-        props[_WAVE_Y] = (amplitude * self.shoreward[..., 1]).ravel()
-        props[_SURF] = np.where(surf, height, 0.0).ravel()  # the local breaker height (0: not surf)
+        props[SLOPE_FX] = (-weight * d_dx * cos_slope).ravel()
+        props[SLOPE_FY] = (-weight * d_dy * cos_slope).ravel()
+        props[LOAD] = cos_slope.ravel()
+        props[CURRENT_X] = np.where(surf, sea.longshore_current_mps, 0.0).ravel()
+        props[WAVE_X] = (amplitude * self.shoreward[..., 0]).ravel()
+        props[WAVE_Y] = (amplitude * self.shoreward[..., 1]).ravel()
+        props[SURF] = np.where(surf, height, 0.0).ravel()  # the local breaker height (0: not surf)
         self._props = np.ascontiguousarray(props.T)
 
     @staticmethod
@@ -355,7 +325,7 @@ class Physics:
         xy = np.asarray(xy, dtype=np.float64).reshape(-1, 2)
         p = self._gather(self._props, self._cells(xy[:, 0], xy[:, 1]))
         shape = self.sea.wave_shape(t_s, wave_phase_s)
-        return np.stack([p[_CURRENT_X] + shape * p[_WAVE_X], shape * p[_WAVE_Y]], axis=1)
+        return np.stack([p[CURRENT_X] + shape * p[WAVE_X], shape * p[WAVE_Y]], axis=1)
 
     # --- the step --------------------------------------------------------------------------------
     def step(
@@ -384,8 +354,19 @@ class Physics:
         jet = _per_robot(jet_cmd_n, np.float64, n)
         inv = _per_robot(inverted, bool, n)
         act = None if active is None else _per_robot(active, bool, n)
+        n_sub = max(1, math.ceil(dt_s / self.substep_s - 1e-9))
+        waves = kernels.wave_table(
+            np.ascontiguousarray(t_s, dtype=np.float64),
+            np.ascontiguousarray(wave_phase_s, dtype=np.float64),
+            self.sea.wave_period_s,
+            self.sea.wave_skew,
+            dt_s,
+            n_sub,
+        )
+        if self._fused:
+            return self._run_fused(state, cmd, jet, inv, act, dt_s, n_sub, waves, run)
         if act is None or act.all():
-            return self._run(state, cmd, jet, inv, t_s, dt_s, wave_phase_s, run)
+            return self._run(state, cmd, jet, inv, dt_s, n_sub, waves, run)
         res = PhysicsStep(
             state=state.copy(),
             power_w=np.zeros(n),
@@ -401,7 +382,7 @@ class Physics:
         idx = np.flatnonzero(act)
         if idx.size:
             sub = None if run is None else run[idx]
-            r = self._run(state[idx], cmd[idx], jet[idx], inv[idx], t_s, dt_s, wave_phase_s, sub)
+            r = self._run(state[idx], cmd[idx], jet[idx], inv[idx], dt_s, n_sub, waves, sub)
             for name in _STEP_FIELDS:
                 getattr(res, name)[idx] = getattr(r, name)
         return res
@@ -412,19 +393,20 @@ class Physics:
         cmd: np.ndarray,
         jet: np.ndarray,
         inverted: np.ndarray,
-        t_s: float | np.ndarray,
         dt_s: float,
-        wave_phase_s: float | np.ndarray,
-        run: np.ndarray | None = None,
+        n_sub: int,
+        waves: tuple[np.ndarray, np.ndarray],
+        run: np.ndarray | None,
     ) -> PhysicsStep:
-        """The substep loop over the active robots only (returns fresh arrays)."""
+        """The substep loop over the active robots only, in numpy (returns fresh arrays). `waves`
+        is `physics_kernels.wave_table`'s (substep, run) wave shapes and crest passages."""
         # turned over: sides swapped, each wheel turning the other way relative to the body
         omega = np.where(inverted[:, None], -cmd[:, ::-1], cmd)
         thrust = np.clip(jet, -self.jet_thrust_max_n, self.jet_thrust_max_n)
         m = s.shape[0]
-        n_sub = max(1, math.ceil(dt_s / self.substep_s - 1e-9))
         h = dt_s / n_sub
-        model, sea = self.model, self.sea
+        model = self.model
+        shapes, crests = waves
         jet_power = np.zeros(m)
         distance = np.zeros(m)
         slip = np.zeros(m)
@@ -436,18 +418,17 @@ class Physics:
         traction = np.zeros((m, 2))
         cell = self._cells(s[:, X], s[:, Y])
         cls = self._terrain[cell]
-        waves = _Waves(sea, t_s, wave_phase_s, run, dt_s, n_sub)
         for k in range(n_sub):
             coef = self._gather(self._class_coef, cls)
             props = self._gather(self._props, cell)
-            coeffs = dict(zip(COEFFICIENTS, coef[:_BUOY15], strict=True))
-            buoy, drag = coef[_BUOY], coef[_DRAG]
+            coeffs = dict(zip(COEFFICIENTS, coef[:BUOY15], strict=True))
+            buoy, drag = coef[BUOY], coef[DRAG]
             heading = s[:, HEADING]
             c, sn = np.cos(heading), np.sin(heading)
             # water velocity, world then body frame; drag on the velocity relative to it
-            shape = waves.shape(k)
-            wx = props[_CURRENT_X] + shape * props[_WAVE_X]
-            wy = shape * props[_WAVE_Y]
+            shape = shapes[k, 0] if run is None else shapes[k][run]
+            wx = props[CURRENT_X] + shape * props[WAVE_X]
+            wy = shape * props[WAVE_Y]
             u, v = s[:, U], s[:, V]
             ru = u - (wx * c + wy * sn)
             rv = v - (wy * c - wx * sn)
@@ -455,10 +436,10 @@ class Physics:
             rel = np.sqrt(ru * ru + rv * rv)
             # slope force (world), on the weight the water leaves
             support = 1.0 - buoy
-            gx, gy = support * props[_SLOPE_FX], support * props[_SLOPE_FY]
+            gx, gy = support * props[SLOPE_FX], support * props[SLOPE_FY]
             wrench[:, 0] = drag * (speed * u - rel * ru) + thrust * buoy + (gx * c + gy * sn)
             wrench[:, 1] = drag * (speed * v - rel * rv) + (gy * c - gx * sn)
-            load = props[_LOAD]
+            load = props[LOAD]
             new = model.step(s, omega, coeffs, h, wrench, load, traction_out=traction)
 
             new_cell = self._cells(new[:, X], new[:, Y])
@@ -476,9 +457,9 @@ class Physics:
 
             dx, dy = new[:, X] - s[:, X], new[:, Y] - s[:, Y]
             distance += np.sqrt(dx * dx + dy * dy)
-            jet_power += coef[_BUOY15]
+            jet_power += coef[BUOY15]
             # longitudinal slip of the mean wheel, signed along the wheels' drive direction
-            w = mean_omega * coef[_RADIUS]
+            w = mean_omega * coef[RADIUS_SCALE]
             w *= self.robot.wheel_radius_m
             un = new[:, U]
             aw = np.abs(w)
@@ -491,18 +472,14 @@ class Physics:
             ratio[aw < SLIP_MIN_SPEED_MPS] = 0.0
             slip += ratio
 
-            crest = waves.crest(k)
-            if crest is True:
-                hits |= props[_SURF] > 0.0
-                np.maximum(hit_height, props[_SURF], out=hit_height)
-            elif crest is not False:  # per robot, by its run
-                hits |= (props[_SURF] > 0.0) & crest
-                hit_height = np.where(crest, np.maximum(hit_height, props[_SURF]), hit_height)
+            crest = crests[k, 0] if run is None else crests[k][run]
+            hits |= (props[SURF] > 0.0) & crest
+            hit_height = np.where(crest, np.maximum(hit_height, props[SURF]), hit_height)
             s, cell, cls = new, new_cell, new_cls
 
         # wheel power at the end of the step: each side's slip traction (rolling resistance left
         # out) at the new velocities, from the last substep, times that side's wheel surface speed
-        surface = omega * (self.robot.wheel_radius_m * coef[_RADIUS])[:, None]  # (m, 2): left, right
+        surface = omega * (self.robot.wheel_radius_m * coef[RADIUS_SCALE])[:, None]  # (m, 2): left, right
         wheel = np.maximum(traction * surface, 0.0).sum(axis=1)
         return PhysicsStep(
             state=s,
@@ -510,9 +487,115 @@ class Physics:
             distance_m=distance,
             slip=slip / n_sub,
             terrain=cls,
-            submersion=coef[_BUOY],
-            in_surf=props[_SURF] > 0.0,
+            submersion=coef[BUOY],
+            in_surf=props[SURF] > 0.0,
             wave_hits=hits,
             wave_height_m=hit_height,
+            obstacle_hit=obstacle,
+        )
+
+    def _scratch_for(self, n: int) -> tuple[np.ndarray, ...]:
+        """The kernels' scratch arrays for n robots, kept from step to step: fresh ones would cost
+        their page faults every step at swarm sizes."""
+        if not self._scratch or self._scratch[0].shape[0] != n:
+            self._scratch = (
+                np.empty((n, 2)),
+                np.empty(n, dtype=np.intp),
+                np.empty((kernels.WORK_ROWS, n)),
+                np.empty((kernels.CONTACT_ROWS, n)),
+                np.empty((kernels.SOLVED_ROWS, n)),
+            )
+        return self._scratch
+
+    def _run_fused(
+        self,
+        state: np.ndarray,
+        cmd: np.ndarray,
+        jet: np.ndarray,
+        inverted: np.ndarray,
+        active: np.ndarray | None,
+        dt_s: float,
+        n_sub: int,
+        waves: tuple[np.ndarray, np.ndarray],
+        run: np.ndarray | None,
+    ) -> PhysicsStep:
+        """`_run` in the kernels of `physics_kernels`, bit for bit, on all rows at once (inactive
+        rows skipped): a kernel call per substep, with numpy's expm1 in between."""
+        n = state.shape[0]
+        h = dt_s / n_sub
+        thrust = np.clip(jet, -self.jet_thrust_max_n, self.jet_thrust_max_n)
+        act = np.ones(n, dtype=bool) if active is None else np.ascontiguousarray(active)
+        run_of = np.zeros(n, dtype=np.intp) if run is None else np.ascontiguousarray(run, dtype=np.intp)
+        s = np.array(state, order="C")  # a copy: the input is not modified
+        cls = np.empty(n, dtype=np.intp)
+        omega, cell, work, contacts, solved = self._scratch_for(n)
+        out = np.zeros((kernels.OUT_ROWS, n))
+        flags = np.zeros((kernels.FLAG_ROWS, n), dtype=bool)
+        obstacle = np.full(n, -1, dtype=np.intp)
+        grid = (self._x0, self._y0, self._inv_cell, self._rows, self._cols)
+        coef, robot = self._class_coef, self._robot_consts
+        cmd, inverted = np.ascontiguousarray(cmd), np.ascontiguousarray(inverted)
+        props, shapes = self._props, waves[0]
+        kernels.start(
+            s,
+            cmd,
+            inverted,
+            act,
+            run_of,
+            thrust,
+            coef,
+            props,
+            self._terrain,
+            grid,
+            robot,
+            shapes,
+            omega,
+            cell,
+            cls,
+            work,
+            contacts,
+        )
+        jet_w = jet_power_w(thrust)
+        exponents = contacts[kernels.EXPONENTS]
+        for k in range(n_sub):
+            np.expm1(exponents, out=exponents)
+            kernels.substep(
+                k,
+                n_sub,
+                h,
+                s,
+                omega,
+                thrust,
+                act,
+                run_of,
+                cell,
+                cls,
+                coef,
+                props,
+                self._terrain,
+                self._impassable,
+                grid,
+                robot,
+                *waves,
+                SLIP_MIN_SPEED_MPS,
+                jet_w,
+                1.0 / ETA_DRIVE,
+                work,
+                contacts,
+                solved,
+                out,
+                flags,
+                obstacle,
+            )
+        return PhysicsStep(
+            state=s,
+            power_w=out[kernels.OUT_POWER],
+            distance_m=out[kernels.OUT_DISTANCE],
+            slip=out[kernels.OUT_SLIP],
+            terrain=cls,
+            submersion=out[kernels.OUT_SUBMERSION],
+            in_surf=flags[kernels.FLAG_SURF],
+            wave_hits=flags[kernels.FLAG_HIT],
+            wave_height_m=out[kernels.OUT_HIT_HEIGHT],
             obstacle_hit=obstacle,
         )
