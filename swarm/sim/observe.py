@@ -1,11 +1,13 @@
 """The default task's observation (`swarm.sim.layout`: 106 floats per robot by default) of any runs
 of a batch (`swarm.sim.world.World`) at once.
 
-Everything that is per robot (own state, the terrain patch in the body frame, links, the task's
-goal and progress) is computed over all the runs' robots in one pass; what depends on a run's own
-objects (its radio neighbour tables, the nearest object still to mark, its clock) run by run. The
-numbers are the same for a run whether it is observed alone (`SwarmEnv`, B = 1) or with others
-(`swarm.sim.vector_env`): every operation is elementwise over robots.
+Everything but the nearest object still to mark is written robot by robot in one numba pass over
+all the runs' robots (`_fill`: own state, the terrain patch in the body frame, the table
+neighbours, links, the task's goal and progress); the nearest object in a second pass over the
+runs with few objects (k-d trees where many); each run's radio neighbour table is remade only at
+its radio updates and arrivals. The numbers are the same for a run whether it is observed alone
+(`SwarmEnv`, B = 1) or with others (`swarm.sim.vector_env`): every robot's numbers come from its
+own run's arrays alone.
 """
 
 from __future__ import annotations
