@@ -100,6 +100,8 @@ class MissionScore:
         #: Without relay, surveillance or beacon criteria the score is a function of the counts
         #: alone, so `score()` keeps its last value with the counts it had.
         self._counts_only = relay_redundancy is None and not self.surveillance and not self.beacons
+        #: Whether `update` has anything to do (zones to reach, time to count).
+        self.timed = bool(self.zones) or not self._counts_only
         self._last: tuple[tuple[int, int, int], float] | None = None
 
     # updates -------------------------------------------------------------------------------------

@@ -522,6 +522,8 @@ class World:
         for b in sorted(found):
             if found[b]:
                 self.sensors.dirty(b)
+                run = self.runs[b]
+                run.score.detected = np.count_nonzero(run.minefield.detected)
             for det in found[b]:
                 self._report(self.runs[b], det)
 
@@ -712,12 +714,12 @@ class World:
             run = self.runs[b]
             score = run.score
             t = times[b]
-            score.detected = np.count_nonzero(run.minefield.detected)
             if score.beach_start_s is None and any_ashore[b]:
                 score.beach_start_s = t
-            needs_xy = bool(score.zones or score.surveillance or score.beacons)
-            xy = self.robot_state[b][ashore[b], :2] if needs_xy else _NO_XY
-            score.update(t, dt, xy, run.relay_up)
+            if score.timed:
+                needs_xy = bool(score.zones or score.surveillance or score.beacons)
+                xy = self.robot_state[b][ashore[b], :2] if needs_xy else _NO_XY
+                score.update(t, dt, xy, run.relay_up)
             if ended[b]:
                 score.at_end = True
             if self.score_every_step:
