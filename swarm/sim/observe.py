@@ -76,15 +76,15 @@ class Observer:
         on = world.alive & world.on_map
         self._refresh_stale(world, runs, on[runs])
         rows = (np.asarray(runs, dtype=np.intp)[:, None] * n + np.arange(n)).ravel()
-        bm = self.setup.beach
+        bm, routes = self.setup.beach, world.routes
         fx, fy = self.patch_offsets
         _fill(
             out, rows, n, world.robot_state, world.energy_wh, world.inverted, world.submersion,
             world.slip, world.phase, float(self.capacity_wh), fx, fy, self.patch_grid,
             float(bm.origin_m[0]), float(bm.origin_m[1]), float(bm.cell_m), bm.shape[0], bm.shape[1],
             world.link_degree, world.source_hops, world.isolated_s, world.role, world.command,
-            FOLLOW, RETURN, world.route_goal(), world.target_m, world.routes.progress(), world.marking,
-            self._tables, self._linked, on, sl["patch_speed"].start,
+            FOLLOW, RETURN, routes.points, routes.start, routes.end, routes.cursor, world.target_m,
+            world.marking, self._tables, self._linked, on, sl["patch_speed"].start,
             sl["neighbours"].start, sl["links"].start, sl["task"].start, len(ROLES),
         )  # fmt: skip
         task = out[:, sl["task"]]
@@ -165,7 +165,7 @@ class Observer:
 def _fill(
     out, rows, n, state, energy, inverted, submersion, slip, phase, capacity,
     fx, fy, grid, origin_x, origin_y, cell_m, grid_rows, grid_cols,
-    degree, hops, isolated, role, command, follow, ret, goal, target, progress, marking,
+    degree, hops, isolated, role, command, follow, ret, points, start, end, cursor, target, marking,
     tables, linked, here, patch_at, neighbours_at, links_at, task_at, n_roles,
 ):  # fmt: skip
     """Every column of rows `rows` of the batch (flat robot index b * n + i) but the nearest object
@@ -226,7 +226,10 @@ def _fill(
         line[links_at + 3] = isolated[b, i]
         line[task_at + role[b, i]] = 1.0
         if command[b, i] == follow or command[b, i] == ret:
-            gx, gy = goal[row, 0] - x, goal[row, 1] - y
+            # the last point of its route (`World.route_goal`), its own position without one
+            last = end[row] - 1 if end[row] > start[row] else -1
+            gx = points[last, 0] - x if last >= 0 else x - x
+            gy = points[last, 1] - y if last >= 0 else y - y
         else:
             gx, gy = target[b, i, 0] - x, target[b, i, 1] - y
         fwd = c * gx + s * gy
@@ -234,7 +237,8 @@ def _fill(
         line[task_at + n_roles] = fwd
         line[task_at + n_roles + 1] = left
         line[task_at + n_roles + 2] = math.sqrt(fwd * fwd + left * left)
-        line[task_at + n_roles + 3] = progress[row]
+        length = end[row] - start[row]  # `Routes.progress`
+        line[task_at + n_roles + 3] = (cursor[row] - start[row]) / max(length, 1) if length > 0 else 1.0
         line[task_at + n_roles + 4] = marking[b, i] >= 0
 
 
