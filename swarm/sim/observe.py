@@ -226,7 +226,7 @@ def _fill(
         line[links_at + 3] = isolated[b, i]
         line[task_at + role[b, i]] = 1.0
         if command[b, i] == follow or command[b, i] == ret:
-            # the last point of its route (`World.route_goal`), its own position without one
+            # the last point of its route, its own position without one
             last = end[row] - 1 if end[row] > start[row] else -1
             gx = points[last, 0] - x if last >= 0 else x - x
             gy = points[last, 1] - y if last >= 0 else y - y
@@ -237,7 +237,7 @@ def _fill(
         line[task_at + n_roles] = fwd
         line[task_at + n_roles + 1] = left
         line[task_at + n_roles + 2] = math.sqrt(fwd * fwd + left * left)
-        length = end[row] - start[row]  # `Routes.progress`
+        length = end[row] - start[row]  # the fraction of its route's waypoints passed, 1 without one
         line[task_at + n_roles + 3] = (cursor[row] - start[row]) / max(length, 1) if length > 0 else 1.0
         line[task_at + n_roles + 4] = marking[b, i] >= 0
 

@@ -161,11 +161,6 @@ class Routes:
             out[finished] = self.points.take(self.end[finished] - 1, axis=0)
         return out
 
-    def progress(self) -> np.ndarray:
-        """(n,) fraction of each route's waypoints passed (1 without a route)."""
-        length = self.end - self.start
-        return np.where(length > 0, (self.cursor - self.start) / np.maximum(length, 1), 1.0)
-
     def compact(self) -> None:
         """Drop the points no robot's route holds any more (replaced routes): a batch that resets
         its runs again and again (`swarm.sim.vector_env`) would otherwise grow without bound."""
@@ -223,10 +218,6 @@ class RoutesView:
         return (
             (self.cursor >= self.sensing_from) & (self.cursor < self.end) & (self.sensing_from > self.start)
         )
-
-    def progress(self) -> np.ndarray:
-        length = self.end - self.start
-        return np.where(length > 0, (self.cursor - self.start) / np.maximum(length, 1), 1.0)
 
 
 def clear_of(points: np.ndarray, avoid: np.ndarray, radius_m: float) -> tuple[np.ndarray, np.ndarray]:

@@ -261,15 +261,6 @@ class World:
         run.next_track_s = 0.0
 
     # commands ---------------------------------------------------------------------------------------
-    def route_goal(self) -> np.ndarray:
-        """(B * n, 2) the last point of each robot's route (its own position without one)."""
-        routes = self.routes
-        has = np.flatnonzero(routes.end > routes.start)
-        goal = self.flat("robot_state")[:, :2].copy()
-        if len(has):
-            goal[has] = routes.points.take(routes.end[has] - 1, axis=0)
-        return goal
-
     def controller_commands(self) -> tuple[np.ndarray, np.ndarray]:
         """Wheel (B, n, 2) and jet (B, n) commands for every robot from its command, route and
         target: the built-in controller (`swarm.sim.control`) of command mode and the policy."""
