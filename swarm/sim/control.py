@@ -17,7 +17,10 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import numba
 import numpy as np
+
+from swarm.sim.physics_kernels import maximum, minimum
 
 #: Thesis eq. 2.26: the effective track width of the skid-steered robot is d / 0.73.
 EFFECTIVE_TRACK_SCALE = 0.73
@@ -82,27 +85,50 @@ def drive_toward(
     jet off). Returns the commands and each robot's distance to its target."""
     d = target_m - state[:, :2]
     dist = np.hypot(d[:, 0], d[:, 1])
-    go = dist > ARRIVE_M
-    if moving is not None:
-        go &= moving
-    err = wrap_angle(np.arctan2(d[:, 1], d[:, 0]) - state[:, 2])
-    cos_err = np.cos(err)
-    yaw = np.clip(YAW_GAIN_PER_S * err, -MAX_YAW_RATE_RADPS, MAX_YAW_RATE_RADPS)
-    # slow down near the target so the robot stops on it rather than circling it
-    speed = np.minimum(speed_mps, 0.1 + 0.5 * dist)
-    forward = np.where(np.abs(err) < PIVOT_ERROR_RAD, speed * cos_err, 0.0)
-    half = limits.effective_half_track_m
-    surface = np.empty((len(dist), 2))
-    np.subtract(forward, half * yaw, out=surface[:, 0])
-    np.add(forward, half * yaw, out=surface[:, 1])
-    peak = np.maximum(np.abs(surface[:, 0]), np.abs(surface[:, 1]))
-    surface *= np.minimum(1.0, limits.max_wheel_speed_mps / np.maximum(peak, 1e-9))[:, None]
-    wheels = surface / limits.wheel_radius_m
-    jet = np.where(submersion > JET_SUBMERSION, limits.jet_thrust_max_n * np.maximum(cos_err, 0.0), 0.0)
-    stop = ~go
-    wheels[stop] = 0.0
-    jet[stop] = 0.0
-    flipped = np.flatnonzero(inverted)
-    if len(flipped):
-        wheels[flipped] = -wheels[flipped][:, ::-1]
+    bearing = np.arctan2(d[:, 1], d[:, 0])  # numpy's own arctan2 (libm's differs in the last bit)
+    m = len(dist)
+    wheels, jet = np.empty((m, 2)), np.empty(m)
+    _drive(
+        state, bearing, dist, np.broadcast_to(np.asarray(speed_mps, np.float64), (m,)), submersion,
+        inverted, np.ones(m, bool) if moving is None else moving, limits.effective_half_track_m,
+        limits.max_wheel_speed_mps, limits.wheel_radius_m, limits.jet_thrust_max_n, wheels, jet,
+    )  # fmt: skip
     return wheels, jet, dist
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _drive(
+    state,
+    bearing,
+    dist,
+    speed_mps,
+    submersion,
+    inverted,
+    moving,
+    half,
+    max_wheel,
+    radius,
+    jet_max,
+    wheels,
+    jet,
+):
+    """`drive_toward`'s commands robot by robot from each target's bearing and distance, in the
+    numpy path's arithmetic: heading error wrapped to [-pi, pi), yaw rate by the gain and clipped,
+    forward speed slowed near the target and by cos(error) (zero beyond `PIVOT_ERROR_RAD`), both
+    wheels' surface speeds scaled together into the motors' limit."""
+    for i in range(dist.shape[0]):
+        left = right = jet[i] = 0.0
+        if dist[i] > ARRIVE_M and moving[i]:
+            err = (bearing[i] - state[i, 2] + np.pi) % (2.0 * np.pi) - np.pi
+            cos_err = np.cos(err)
+            yaw = minimum(maximum(YAW_GAIN_PER_S * err, -MAX_YAW_RATE_RADPS), MAX_YAW_RATE_RADPS)
+            speed = minimum(speed_mps[i], 0.1 + 0.5 * dist[i])
+            forward = speed * cos_err if abs(err) < PIVOT_ERROR_RAD else 0.0
+            left, right = forward - half * yaw, forward + half * yaw
+            scale = minimum(1.0, max_wheel / maximum(maximum(abs(left), abs(right)), 1e-9))
+            left, right = left * scale / radius, right * scale / radius
+            if submersion[i] > JET_SUBMERSION:
+                jet[i] = jet_max * maximum(cos_err, 0.0)
+        if inverted[i]:  # turned over: sides swapped, each wheel the other way (a stop too: -0)
+            left, right = -right, -left
+        wheels[i, 0], wheels[i, 1] = left, right

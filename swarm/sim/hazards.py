@@ -256,7 +256,7 @@ class _ContactScreen:
         return _screen(xy, mask, run, self.lo, self.inv_cell, self.nx, self.ny, self.offset, self.grid)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def _screen(xy, mask, run, lo, inv_cell, nx, ny, offset, grid):
     """`_ContactScreen.screen`, robot by robot: the grid cell is (xy - lo) * inv_cell floored (the
     cast floors the non-negative), NaN positions (robots at sea, if the env leaves them so)

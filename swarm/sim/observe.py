@@ -161,7 +161,7 @@ class Observer:
         )  # fmt: skip
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def _fill(
     out, rows, n, state, energy, inverted, submersion, slip, phase, capacity,
     fx, fy, grid, origin_x, origin_y, cell_m, grid_rows, grid_cols,
@@ -242,7 +242,7 @@ def _fill(
         line[task_at + n_roles + 4] = marking[b, i] >= 0
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, error_model="numpy", inline="always")
 def _cell(x, y, origin_x, origin_y, cell_m, grid_rows, grid_cols):
     """Row-major index of the cell under a point (`Observer.flat_cell`)."""
     col = min(max(int((x - origin_x) / cell_m), 0), grid_cols - 1)
@@ -250,7 +250,7 @@ def _cell(x, y, origin_x, origin_y, cell_m, grid_rows, grid_cols):
     return r * grid_cols + col
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def _nearest(xy, live, k, table):
     """Rows `live` of `table`: each robot's k nearest other robots of `live` by squared distance,
     nearest first, ties to the lower id (every pair looked at)."""
@@ -284,7 +284,7 @@ def _nearest(xy, live, k, table):
             table[i, slot] = best_j[slot]
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def _linked_slots(indptr, indices, table, out):
     """`out[i, s]`: whether robot i's link to its table neighbour `table[i, s]` works, from the
     radio's links in CSR form (columns ascending within each row)."""
@@ -299,7 +299,7 @@ def _linked_slots(indptr, indices, table, out):
             out[i, slot] = at < hi and indices[at] == j
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def _nearest_open(state, runs, rows, objs, open_, starts, block):
     """Rows `rows[d]` onward of `block`: for every robot of run `runs[d]`, the body-frame offset
     to the nearest of that run's objects `objs[starts[d]:starts[d + 1]]` still open (the first

@@ -107,19 +107,19 @@ class Robot(NamedTuple):
 
 
 @njit(cache=True, error_model="numpy")
-def _max(a: float, b: float) -> float:
+def maximum(a: float, b: float) -> float:
     """np.maximum: NaN if either is."""
     return a if a >= b or a != a else b
 
 
 @njit(cache=True, error_model="numpy")
-def _min(a: float, b: float) -> float:
+def minimum(a: float, b: float) -> float:
     """np.minimum: NaN if either is."""
     return a if a <= b or a != a else b
 
 
 @njit(cache=True, error_model="numpy")
-def _sign(a: float) -> float:
+def sign(a: float) -> float:
     """np.sign: 0 for either zero, NaN for NaN."""
     if a > 0.0:
         return 1.0
@@ -159,13 +159,13 @@ def wave_table(
 @njit(cache=True, error_model="numpy")
 def _spin_m(turning_m: float, mu_lateral: float) -> float:
     """The patch spin radius turning_resistance_m / mu_lateral, as `SkidModel._ground`."""
-    return turning_m / _max(mu_lateral, _MIN_MU)
+    return turning_m / maximum(mu_lateral, _MIN_MU)
 
 
 @njit(cache=True, error_model="numpy")
 def _rolling(w: float, vx: float, reg: float) -> float:
     """A side's rolling speed, max(|w|, |vx|) + reg."""
-    return _max(abs(w), abs(vx)) + reg
+    return maximum(abs(w), abs(vx)) + reg
 
 
 @njit(cache=True, error_model="numpy")
@@ -251,10 +251,10 @@ def _slips_pass(work: np.ndarray, rb: Robot, contacts: np.ndarray) -> None:
         spin = _spin_m(work[_TURNING, i], work[_MU_LAT, i]) * r
         a0, a1 = sx0 * sx0 + spin * spin, sx1 * sx1 + spin * spin
         b0, b1 = vy0 * vy0, vy1 * vy1
-        s00 = _max(math.sqrt(a0 + b0) / roll0, _MIN_SLIP)
-        s01 = _max(math.sqrt(a0 + b1) / roll0, _MIN_SLIP)
-        s10 = _max(math.sqrt(a1 + b0) / roll1, _MIN_SLIP)
-        s11 = _max(math.sqrt(a1 + b1) / roll1, _MIN_SLIP)
+        s00 = maximum(math.sqrt(a0 + b0) / roll0, _MIN_SLIP)
+        s01 = maximum(math.sqrt(a0 + b1) / roll0, _MIN_SLIP)
+        s10 = maximum(math.sqrt(a1 + b0) / roll1, _MIN_SLIP)
+        s11 = maximum(math.sqrt(a1 + b1) / roll1, _MIN_SLIP)
         k = -work[_SHEAR, i]
         contacts[0, i], contacts[1, i], contacts[2, i], contacts[3, i] = s00, s01, s10, s11
         contacts[4, i], contacts[5, i], contacts[6, i], contacts[7, i] = s00 / k, s01 / k, s10 / k, s11 / k
@@ -362,8 +362,8 @@ def _velocities_pass(h: float, work: np.ndarray, contacts: np.ndarray, rb: Robot
 def _slip_ratio(w: float, u: float, min_speed: float) -> float:
     """Longitudinal slip of the mean wheel (surface speed w) at body speed u, in [0, 1]."""
     aw = abs(w)
-    ratio = (aw - _sign(w) * u) / _max(_max(aw, abs(u)), min_speed)
-    ratio = _max(_min(ratio, 1.0), 0.0)
+    ratio = (aw - sign(w) * u) / maximum(maximum(aw, abs(u)), min_speed)
+    ratio = maximum(minimum(ratio, 1.0), 0.0)
     return 0.0 if aw < min_speed else ratio
 
 
@@ -427,11 +427,11 @@ def _move_pass(
         out[OUT_JET, i] += coef[c, BUOY15]
         if crests[k, run[i]]:
             flags[FLAG_HIT, i] |= surf > 0.0
-            out[OUT_HIT_HEIGHT, i] = _max(out[OUT_HIT_HEIGHT, i], surf)
+            out[OUT_HIT_HEIGHT, i] = maximum(out[OUT_HIT_HEIGHT, i], surf)
         if last:  # wheel power from the last substep's slip traction (rolling resistance left out)
             surface = rb.wheel_radius_m * scale
-            left = _max(solved[_TRACTION0, i] * (o0 * surface), 0.0)
-            wheel = left + _max(solved[_TRACTION1, i] * (o1 * surface), 0.0)
+            left = maximum(solved[_TRACTION0, i] * (o0 * surface), 0.0)
+            wheel = left + maximum(solved[_TRACTION1, i] * (o1 * surface), 0.0)
             out[OUT_POWER, i] = wheel * drive_scale + jet_w[i] * out[OUT_JET, i] * (1.0 / n_sub)
             out[OUT_SUBMERSION, i] = coef[c, BUOY]
             flags[FLAG_SURF, i] = surf > 0.0

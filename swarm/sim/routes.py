@@ -14,6 +14,8 @@ import math
 import numba
 import numpy as np
 
+from swarm.sim.physics_kernels import maximum, minimum
+
 #: A waypoint counts as reached within this distance (m); the last one of a route, where the
 #: robot stops, within `FINAL_CAPTURE_M` (inside the controller's stopping distance).
 CAPTURE_M = 1.0
@@ -116,49 +118,16 @@ class Routes:
     def advance(self, xy: np.ndarray, mask: np.ndarray) -> None:
         """Move the cursors of robots in `mask` past every waypoint they have reached (a few at
         most per step): within the capture radius of it, or past the end of its leg and close to
-        the leg's line (`_leg_coordinates`; the final waypoint only by its radius)."""
+        the leg's line (the final waypoint only by its radius)."""
         _advance(self.points, self.start, self.end, self.cursor, xy, mask)
 
-    def _leg_coordinates(
-        self, idx: np.ndarray, cur_index: np.ndarray, cur: np.ndarray, xy: np.ndarray
-    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """Each robot's position along and across the leg it is on (from the waypoint before its
-        cursor to the cursor's, `cur`, at point index `cur_index`), the leg's length (0 on a
-        route's first waypoint) and its first point (the cursor's own point there)."""
-        prev = self.points.take(np.where(cur_index > self.start[idx], cur_index - 1, cur_index), axis=0)
-        leg = cur - prev
-        length = np.hypot(leg[:, 0], leg[:, 1])
-        unit = leg / np.maximum(length, 1e-12)[:, None]
-        rel = xy - prev
-        along = rel[:, 0] * unit[:, 0] + rel[:, 1] * unit[:, 1]
-        cross = unit[:, 0] * rel[:, 1] - unit[:, 1] * rel[:, 0]
-        return along, cross, length, prev
-
-    def targets(self, xy: np.ndarray) -> np.ndarray:
-        """(n, 2) where each robot steers: `LOOKAHEAD_M` ahead of its projection on its current leg,
-        capped at the leg's end (the waypoint itself on a route's first point; its own position
-        when its route is done)."""
-        out = xy.copy()
-        idx = np.flatnonzero(self.cursor < self.end)
-        if not len(idx):
-            return out
-        cur_index = self.cursor[idx]
-        cur = self.points.take(cur_index, axis=0)
-        along, _, length, prev = self._leg_coordinates(idx, cur_index, cur, xy.take(idx, axis=0))
-        ahead = np.clip(along, 0.0, length) + LOOKAHEAD_M
-        on_leg = (length > 0) & (ahead < length)
-        frac = np.where(on_leg, ahead / np.maximum(length, 1e-12), 1.0)
-        out[idx] = np.where(on_leg[:, None], prev + (cur - prev) * frac[:, None], cur)
-        return out
-
     def steer_points(self, xy: np.ndarray) -> np.ndarray:
-        """(n, 2) `targets` for the robots on their routes, and the last point of its route for
-        each robot done with one (its own position without a route): what the built-in
-        controller steers for, a finished route's end being where the robot keeps station."""
-        out = self.targets(xy)
-        finished = np.flatnonzero((self.cursor >= self.end) & (self.end > self.start))
-        if len(finished):
-            out[finished] = self.points.take(self.end[finished] - 1, axis=0)
+        """(n, 2) where each robot steers: on its route, `LOOKAHEAD_M` ahead of its projection on
+        its current leg, capped at the leg's end (the waypoint itself on a route's first point);
+        done with its route, the route's last point, where it keeps station; without a route,
+        its own position. What the built-in controller steers for."""
+        out = np.empty((len(xy), 2))
+        _steer_points(self.points, self.start, self.end, self.cursor, xy, out)
         return out
 
     def compact(self) -> None:
@@ -258,9 +227,9 @@ def clear_of(points: np.ndarray, avoid: np.ndarray, radius_m: float) -> tuple[np
     return out, where
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def _advance(points, start, end, cursor, xy, mask):
-    """`Routes.advance`, robot by robot, in `_leg_coordinates`'s arithmetic."""
+    """`Routes.advance`, robot by robot."""
     for i in range(cursor.shape[0]):
         if not mask[i]:
             continue
@@ -273,15 +242,41 @@ def _advance(points, start, end, cursor, xy, mask):
             final = cur == end[i] - 1
             hit = math.hypot(wx - x, wy - y) < (FINAL_CAPTURE_M if final else CAPTURE_M)
             if not hit and not final:
-                prev = cur - 1 if cur > start[i] else cur
-                px, py = points[prev, 0], points[prev, 1]
-                lx, ly = wx - px, wy - py
-                length = math.hypot(lx, ly)
-                ux, uy = lx / max(length, 1e-12), ly / max(length, 1e-12)
-                rx, ry = x - px, y - py
-                along = rx * ux + ry * uy
-                cross = ux * ry - uy * rx
+                _, _, _, _, length, along, cross = _leg(points, start[i], cur, x, y)
                 hit = length > 0 and along >= length and abs(cross) <= PASS_CROSS_TRACK_M
             if not hit:
                 break
             cursor[i] += 1
+
+
+@numba.njit(cache=True, error_model="numpy", inline="always")
+def _leg(points, start, cur, x, y):
+    """The leg a robot is on (from the waypoint before its cursor `cur` to the cursor's): its
+    first point, its direction, its length (0 on a route's first waypoint) and the robot's
+    position along and across it."""
+    prev = cur - 1 if cur > start else cur
+    px, py = points[prev, 0], points[prev, 1]
+    lx, ly = points[cur, 0] - px, points[cur, 1] - py
+    length = math.hypot(lx, ly)
+    ux, uy = lx / maximum(length, 1e-12), ly / maximum(length, 1e-12)
+    rx, ry = x - px, y - py
+    return px, py, lx, ly, length, rx * ux + ry * uy, ux * ry - uy * rx
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _steer_points(points, start, end, cursor, xy, out):
+    """`Routes.steer_points`, robot by robot."""
+    for i in range(xy.shape[0]):
+        x, y, cur = xy[i, 0], xy[i, 1], cursor[i]
+        if cur < end[i]:
+            px, py, lx, ly, length, along, _ = _leg(points, start[i], cur, x, y)
+            ahead = minimum(maximum(along, 0.0), length) + LOOKAHEAD_M
+            if length > 0 and ahead < length:
+                frac = ahead / maximum(length, 1e-12)
+                out[i, 0], out[i, 1] = px + lx * frac, py + ly * frac
+            else:
+                out[i, 0], out[i, 1] = points[cur, 0], points[cur, 1]
+        elif end[i] > start[i]:
+            out[i, 0], out[i, 1] = points[end[i] - 1, 0], points[end[i] - 1, 1]
+        else:
+            out[i, 0], out[i, 1] = x, y
