@@ -60,14 +60,6 @@ class Observer:
         self._table_version[b] = -1
         self._table_on[b] = False
 
-    def flat_cell(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
-        """Row-major index of the cell under each point (the nearest edge cell outside the map)."""
-        bm = self.setup.beach
-        rows, cols = bm.shape
-        c = np.clip(((x - bm.origin_m[0]) / bm.cell_m).astype(np.intp), 0, cols - 1)
-        r = np.clip(((y - bm.origin_m[1]) / bm.cell_m).astype(np.intp), 0, rows - 1)
-        return r * cols + c
-
     def observe(self, world, runs: list[int]) -> np.ndarray:
         """(len(runs), n, obs_dim) float32: every robot's observation in runs `runs` now."""
         n, lay, r = self.n, self.layout, len(runs)
@@ -244,7 +236,7 @@ def _fill(
 
 @numba.njit(cache=True, error_model="numpy", inline="always")
 def _cell(x, y, origin_x, origin_y, cell_m, grid_rows, grid_cols):
-    """Row-major index of the cell under a point (`Observer.flat_cell`)."""
+    """Row-major index of the cell under a point (the nearest edge cell outside the map)."""
     col = min(max(int((x - origin_x) / cell_m), 0), grid_cols - 1)
     r = min(max(int((y - origin_y) / cell_m), 0), grid_rows - 1)
     return r * grid_cols + col
