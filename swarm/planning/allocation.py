@@ -41,10 +41,9 @@ index). No randomness is drawn.
 
 from __future__ import annotations
 
-import math
-from collections import deque
 from dataclasses import dataclass, field
 
+import numba
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
@@ -173,36 +172,52 @@ def _bid_phase(
     max_bids: int,
 ) -> int:
     """Gauss-Seidel forward auction until every person holds an object (arrays updated in place)."""
-    queue = deque(np.flatnonzero(person_object < 0).tolist())
+    bids = _bids(benefit, prices, person_object, object_person, eps, cap, max_bids)
+    if bids < 0:
+        raise SwarmError(f"auction: no assignment after {max_bids} bids (eps {eps:g} too small?)")
+    return bids
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _bids(benefit, prices, person_object, object_person, eps, cap, max_bids):
+    """`_bid_phase`'s bids, one at a time in first-in first-out order of the unassigned persons
+    (each bid a handful of scalar operations: compiled, as numpy's per-call overhead would
+    dominate). Returns the bids made, or -1 once more than `max_bids`."""
+    n = prices.shape[0]
+    queue = np.empty(n + 1, np.intp)  # the unassigned persons, each at most once
+    head, tail = 0, 0
+    for i in range(n):
+        if person_object[i] < 0:
+            queue[tail] = i
+            tail += 1
+    values = np.empty(n)
     bids = 0
-    n = len(prices)
-    # plain Python ints and floats for the per-bid bookkeeping (a bid is a handful of scalar
-    # operations: numpy's per-call overhead on scalars would dominate); the same IEEE arithmetic
-    owner, held = object_person.tolist(), person_object.tolist()
-    while queue:
-        i = queue.popleft()
-        values = benefit[i] - prices
-        j = int(values.argmax())
-        best = float(values[j])
-        if n > 1:
-            values[j] = -np.inf
-            second = float(values.max())
-        else:
-            second = -math.inf
-        if not math.isfinite(second):  # one feasible object: any finite raise keeps eps-CS
+    while head != tail:
+        i = queue[head]
+        head = (head + 1) % (n + 1)
+        j = 0
+        for k in range(n):
+            values[k] = benefit[i, k] - prices[k]
+            if values[k] > values[j]:  # the first of equals, as argmax
+                j = k
+        best = values[j]
+        second = -np.inf
+        for k in range(n):
+            if k != j and values[k] > second:
+                second = values[k]
+        if not np.isfinite(second):  # one feasible object: any finite raise keeps eps-CS
             second = best - cap
         prices[j] += best - second + eps
-        previous = owner[j]
-        owner[j] = i
-        held[i] = j
+        previous = object_person[j]
+        object_person[j] = i
+        person_object[i] = j
         if previous >= 0:
-            held[previous] = -1
-            queue.append(previous)
+            person_object[previous] = -1
+            queue[tail] = previous
+            tail = (tail + 1) % (n + 1)
         bids += 1
         if bids > max_bids:
-            object_person[:], person_object[:] = owner, held
-            raise SwarmError(f"auction: no assignment after {max_bids} bids (eps {eps:g} too small?)")
-    object_person[:], person_object[:] = owner, held
+            return -1
     return bids
 
 
