@@ -226,3 +226,9 @@ def test_auction_slot_prices_and_empty_problem() -> None:
         auction(np.ones((2, 2)), eps=0.0)
     with pytest.raises(SwarmError):
         auction(np.ones((2, 2)), active_robots=[True])
+
+
+def test_an_auction_out_of_bids_says_so() -> None:
+    rng = np.random.default_rng(1)
+    with pytest.raises(SwarmError, match="no assignment after 3 bids"):
+        auction(rng.uniform(1.0, 9.0, (8, 8)), eps=1e-6, max_bids=3)
