@@ -21,6 +21,7 @@ import math
 import numpy as np
 
 from swarm.planning.detection import inverse_cube_look
+from swarm.sim import pair_kernels
 from swarm.sim.comms import sorted_unique
 from swarm.sim.sensing import _NEIGHBOUR_BINS, DENSE_PAIRS, SCREEN_MARGIN_M, Detection, MineSensor
 
@@ -205,17 +206,14 @@ class SensorBatch:
         counts = np.append(cuts, len(run)) - firsts
         radius = self._range[ids] + np.maximum.reduceat(half, firsts)
         dense = counts * self._mine_count[ids] <= DENSE_PAIRS
-        radius2 = np.repeat(radius * radius, counts)
-        pos = self._mine_xy[run]  # (robots, width, 2)
-        d2 = (mid[:, None, 0] - pos[:, :, 0]) ** 2 + (mid[:, None, 1] - pos[:, :, 1]) ** 2
-        near = (d2 <= radius2[:, None]) & self._target[run]
-        if not dense.all():
-            near &= np.repeat(dense, counts)[:, None]
-        r, j = np.nonzero(near)  # robot then mine within each run: the order each run draws in
+        # a run with too many pairs for the dense check has no pairs here (-1: nothing that near)
+        radius2 = np.repeat(np.where(dense, radius * radius, -1.0), counts)
+        # robot then mine within each run: the order each run draws in
+        r, j = pair_kernels.runs_near_pairs(mid, run, self._mine_xy, self._target, radius2)
         at = [*np.searchsorted(run[r], ids).tolist(), len(r)]
         u = np.empty(len(r))
         for k, (b, is_dense) in enumerate(zip(ids.tolist(), dense.tolist(), strict=True)):
-            if not is_dense:  # too many pairs for the dense check: the run's own (k-d tree) way
+            if not is_dense:  # too many pairs for one pass over its mines: its own grid search
                 rows = slice(b * n, (b + 1) * n)
                 out[b] = self.sensors[b]._looks(xy[rows], sensing[rows], float(t_s[b]), rngs[b])
                 continue
@@ -224,7 +222,7 @@ class SensorBatch:
                 rngs[b].random(out=u[at[k] : at[k + 1]])
         if not len(r):
             return
-        look = inverse_cube_look(start[r], end[r], pos[r, j])
+        look = inverse_cube_look(start[r], end[r], self._mine_xy[run[r], j])
         hazard = self.sensors[int(ids[0])].sensor.width_m ** 2 / (8.0 * math.pi) * look
         hits = np.flatnonzero(u < -np.expm1(-hazard))
         if not len(hits):

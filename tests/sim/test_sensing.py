@@ -11,11 +11,13 @@ import math
 
 import numpy as np
 import pytest
+from scipy.spatial import cKDTree
 from shapely.geometry import box
 
 from swarm.mission.schema import LateralRange, Sensor
 from swarm.planning.coverage import detection_probability
 from swarm.planning.detection import INVERSE_CUBE_FLOOR
+from swarm.sim import pair_kernels
 from swarm.sim.mines import MineField
 from swarm.sim.sensing import (
     Detection,
@@ -396,3 +398,19 @@ def test_mines_lie_only_on_ground_that_can_be_crossed() -> None:
     west = float(np.mean(x[free] < np.median(x[free])))
     share = float(np.mean(mines[:, 0] < np.median(x[free])))
     assert abs(share - west) <= 4 * math.sqrt(west * (1 - west) / len(mines))
+
+
+@pytest.mark.parametrize("radius", [0.5, 7.0, 40.0])
+def test_near_pairs_are_the_dense_checks_and_the_k_d_trees(radius: float) -> None:
+    """The compiled grid search finds the pairs of a dense distance check, in its order, and the
+    pairs of the k-d tree's sparse distance matrix that a large field used to take."""
+    rng = np.random.default_rng(4)
+    mines = rng.uniform(0, 300, size=(150, 2))
+    points = np.concatenate([rng.uniform(-20, 320, size=(400, 2)), mines[:20] + 1e-3])
+    r, j = pair_kernels.near_pairs(points, mines, radius)
+    d2 = (points[:, None, 0] - mines[None, :, 0]) ** 2 + (points[:, None, 1] - mines[None, :, 1]) ** 2
+    want_r, want_j = np.nonzero(d2 <= radius * radius)
+    np.testing.assert_array_equal(r, want_r)
+    np.testing.assert_array_equal(j, want_j)
+    tree = cKDTree(points).sparse_distance_matrix(cKDTree(mines), radius, output_type="ndarray")
+    np.testing.assert_array_equal(np.sort(r * 1000 + j), np.sort(tree["i"] * 1000 + tree["j"]))
