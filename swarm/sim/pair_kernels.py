@@ -4,8 +4,8 @@ k-d trees and Python loops over runs.
 
 Every kernel does the arithmetic of the numpy or scipy code it replaces, operation for operation
 (squared distances as ``dx * dx + dy * dy``, square roots; no transcendental functions, no fast
-math), so it gives the same answers bit for bit; tests/sim/test_comms_kernels.py pins each to a
-reference.
+math), so it gives the same answers bit for bit; tests/sim/test_comms_kernels.py and
+tests/sim/test_sensing.py pin each to a reference.
 """
 
 from __future__ import annotations
@@ -252,7 +252,7 @@ def _emit_pairs(
                 seen[j] = a
                 row[size] = j
                 size += 1
-        row[:size].sort()
+        _insertion_sort(row, size)
         for s in range(size):
             keys[m] = base + idx[a] * big_n + idx[row[s]]
             m += 1
@@ -417,7 +417,7 @@ def near_pairs(points: np.ndarray, mines: np.ndarray, radius: float) -> tuple[np
                     if dx * dx + dy * dy <= r2:
                         row[size] = j
                         size += 1
-        row[:size].sort()
+        _insertion_sort(row, size)
         for s in range(size):
             out_r.append(i)
             out_j.append(row[s])
@@ -443,3 +443,47 @@ def runs_near_pairs(
                     out_r.append(q)
                     out_j.append(j)
     return np.array(out_r, np.int64), np.array(out_j, np.int64)
+
+
+@numba.njit(cache=True)
+def _insertion_sort(a: np.ndarray, size: int) -> None:
+    """Sort ``a[:size]`` in place: the few entries of one robot's row, faster than a library sort."""
+    for p in range(1, size):
+        v = a[p]
+        q = p
+        while q > 0 and a[q - 1] > v:
+            a[q] = a[q - 1]
+            q -= 1
+        a[q] = v
+
+
+@numba.njit(cache=True)
+def screen(
+    xy: np.ndarray,
+    last_xy: np.ndarray,
+    who: np.ndarray,
+    n: int,
+    size: float,
+    keys: np.ndarray,
+    bin_offset: int,
+    run_stride: int,
+    margin2: float,
+) -> tuple[np.ndarray, np.ndarray]:
+    """For the robots `who` (rows of `xy`, runs of n robots): is each in a screen bin, i.e. is
+    ``run * run_stride + ((bx + bin_offset) << 22) + (by + bin_offset)``, with ``b = floor(xy /
+    size)``, among the sorted `keys`; and did it move further than ``sqrt(margin2)`` since
+    `last_xy` (never, from NaN)."""
+    in_bins = np.zeros(len(who), np.bool_)
+    jumped = np.zeros(len(who), np.bool_)
+    for q in range(len(who)):
+        g = who[q]
+        if len(keys):
+            bx = np.int64(math.floor(xy[g, 0] / size)) + bin_offset
+            by = np.int64(math.floor(xy[g, 1] / size)) + bin_offset
+            key = (g // n) * run_stride + (bx << 22) + by
+            at = min(np.searchsorted(keys, key), len(keys) - 1)
+            in_bins[q] = keys[at] == key
+        dx = xy[g, 0] - last_xy[g, 0]
+        dy = xy[g, 1] - last_xy[g, 1]
+        jumped[q] = dx * dx + dy * dy > margin2
+    return in_bins, jumped

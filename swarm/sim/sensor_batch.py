@@ -54,11 +54,6 @@ class SensorBatch:
     def dirty(self, b: int) -> None:
         self._dirty[b] = True
 
-    def _bins(self, xy: np.ndarray) -> np.ndarray:
-        """Screen bins (`_maybe_near`'s): exact for any point within 2^21 bins (10,000 km) of
-        the origin, which every robot on a map is."""
-        return np.floor(xy / self.size).astype(np.int64)
-
     @staticmethod
     def _bin_keys(bins: np.ndarray, run: np.ndarray | int) -> np.ndarray:
         bins = bins + _BIN_OFFSET
@@ -118,16 +113,12 @@ class SensorBatch:
         if self._dirty.any():
             self._refresh()
         who = np.flatnonzero(sensing)
-        run = who // n if self.runs > 1 else np.zeros(len(who), np.intp)
-        in_bins = np.zeros(len(who), bool)
-        if len(who) and len(self._keys):
-            keys = self._bin_keys(self._bins(xy[who]), run)
-            at = np.minimum(np.searchsorted(self._keys, keys), len(self._keys) - 1)
-            in_bins = self._keys[at] == keys
-        # a robot that jumped further than the screen's margin is looked at by its run's update
-        seg = xy[who] - last_xy[who]
-        with np.errstate(invalid="ignore"):
-            jumped = (seg[:, 0] * seg[:, 0] + seg[:, 1] * seg[:, 1]) > SCREEN_MARGIN_M**2
+        run = who // n
+        # robots in a bin next to a target of their run (`_maybe_near`'s screen; exact for any
+        # point within 2^21 bins, 10,000 km, of the origin, as every robot on a map is), and robots
+        # that jumped further than the screen's margin: those are looked at by their run's update
+        in_bins, jumped = pair_kernels.screen(xy, last_xy, who, n, self.size, self._keys, _BIN_OFFSET,
+                                              _RUN_STRIDE, SCREEN_MARGIN_M**2)  # fmt: skip
         busy = self._discrete.copy()  # a sensor that draws once per pass: its own update
         busy[run[in_bins]] = True
         busy[run[jumped]] = True
