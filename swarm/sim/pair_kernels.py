@@ -51,7 +51,7 @@ def table_candidates(
     total = 0
     for r in range(n_runs):
         total += np.count_nonzero(live[r])
-    keys = np.empty(total * (k - 1 + f) + n_runs * len(ff_keys), np.int64)
+    keys = np.empty(total * (k + f) + n_runs * len(ff_keys), np.int64)  # k: a pair per table entry
     tie = np.zeros(n_runs, np.bool_)
     m = 0
     for r in range(n_runs):
@@ -82,6 +82,9 @@ def _nearest(px: np.ndarray, py: np.ndarray, k: int, r2: float) -> np.ndarray:
     cell, nx, ny, cx, cy = _grid(px - x0, py - y0, w, h)
     slack = 1e-9 * (abs(x0) + abs(y0) + w + h + cell)  # rounding of the cells' edges
     start, members = _bin(cx * ny + cy, nx * ny)
+    # the points in cell order: a cell's points lie together in memory, and neighbours follow
+    # each other through the search
+    px, py, cx, cy = px[members], py[members], cx[members], cy[members]
     kept = k + 1  # one more than needed, to see a tie at the table's edge
     best_d = np.empty(kept)  # a max-heap
     best_j = np.empty(kept, np.int64)
@@ -96,8 +99,7 @@ def _nearest(px: np.ndarray, py: np.ndarray, k: int, r2: float) -> np.ndarray:
                     if not edge and abs(gy - cy[i]) != q:
                         continue
                     c = gx * ny + gy
-                    for s in range(start[c], start[c + 1]):
-                        j = members[s]
+                    for j in range(start[c], start[c + 1]):
                         dx = px[j] - px[i]
                         dy = py[j] - py[i]
                         found = _keep(dx * dx + dy * dy, j, r2, best_d, best_j, found)
@@ -123,7 +125,7 @@ def _nearest(px: np.ndarray, py: np.ndarray, k: int, r2: float) -> np.ndarray:
             if best_d[0] == farthest:
                 return np.empty((0, k), np.int64)
             found = k
-        out[i, :found] = best_j[:found]
+        out[members[i], :found] = members[best_j[:found]]
     return out
 
 
