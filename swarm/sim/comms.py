@@ -301,10 +301,10 @@ class RadioNet:
         k, n, big_n = len(pos), self.n, self.n_nodes
         nn = big_n * big_n
         table = self.neighbour_table
-        live = np.count_nonzero(finite[:, :n], axis=1)
         dense = np.full(k, n <= DENSE_ROBOTS)
         tabled = np.zeros(k, dtype=bool)
         if table is not None and n > table + 1:
+            live = np.count_nonzero(finite[:, :n], axis=1)
             dense &= live <= table + 1
             tabled = (live > table + 1) & (self.candidate_range_m[_RR] > 0)
         parts = []
