@@ -78,7 +78,8 @@ NEIGHBOUR_TABLE = 32
 MIN_DISTANCE_M = 1e-3
 
 #: Up to this many robots the candidate pairs of all the runs of a batch are found at once on dense
-#: (runs, N, N) distances; beyond it, or where the neighbour tables apply, run by run with k-d trees.
+#: (runs, N, N) distances; where the neighbour tables apply, by one compiled grid search over all
+#: the runs (`pair_kernels.table_candidates`); otherwise run by run with k-d trees.
 DENSE_ROBOTS = 64
 
 _RR, _RF, _FF = 0, 1, 2  # pair classes: robot-robot, robot-fixed, fixed-fixed
