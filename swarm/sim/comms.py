@@ -63,11 +63,12 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse
-from scipy.sparse.csgraph import breadth_first_order, connected_components, maximum_flow
+from scipy.sparse.csgraph import maximum_flow
 from scipy.spatial import cKDTree
 
 from swarm.errors import SwarmError
 from swarm.planning.radio import RadioParams, comm_range_m, received_power_dbm
+from swarm.sim import pair_kernels
 
 #: Candidate pairs: the link could close with shadowing this many standard deviations favourable.
 CANDIDATE_SIGMAS = 4.0
@@ -77,7 +78,8 @@ NEIGHBOUR_TABLE = 32
 MIN_DISTANCE_M = 1e-3
 
 #: Up to this many robots the candidate pairs of all the runs of a batch are found at once on dense
-#: (runs, N, N) distances; beyond it, or where the neighbour tables apply, run by run with k-d trees.
+#: (runs, N, N) distances; where the neighbour tables apply, by one compiled grid search over all
+#: the runs (`pair_kernels.table_candidates`); otherwise run by run with k-d trees.
 DENSE_ROBOTS = 64
 
 _RR, _RF, _FF = 0, 1, 2  # pair classes: robot-robot, robot-fixed, fixed-fixed
@@ -297,12 +299,15 @@ class RadioNet:
     def _candidate_keys(self, pos: np.ndarray, finite: np.ndarray) -> np.ndarray:
         """Keys ``b * N^2 + i * N + j`` (i < j) of the candidate pairs of runs ``b = 0..k-1`` at
         positions `pos` (k, N, 2), sorted; `finite` (k, N) marks the nodes with a position."""
-        k, big_n = len(pos), self.n_nodes
+        k, n, big_n = len(pos), self.n, self.n_nodes
         nn = big_n * big_n
         table = self.neighbour_table
-        dense = np.full(k, self.n <= DENSE_ROBOTS)
-        if table is not None and self.n > table + 1:
-            dense &= np.count_nonzero(finite[:, : self.n], axis=1) <= table + 1
+        dense = np.full(k, n <= DENSE_ROBOTS)
+        tabled = np.zeros(k, dtype=bool)
+        if table is not None and n > table + 1:
+            live = np.count_nonzero(finite[:, :n], axis=1)
+            dense &= live <= table + 1
+            tabled = (live > table + 1) & (self.candidate_range_m[_RR] > 0)
         parts = []
         if dense.all():
             parts.append(np.flatnonzero(self._dense_candidates(pos, finite)))
@@ -310,9 +315,27 @@ class RadioNet:
             runs = np.flatnonzero(dense)
             run, key = np.divmod(np.flatnonzero(self._dense_candidates(pos[runs], finite[runs])), nn)
             parts.append(runs[run] * nn + key)
-        for b in np.flatnonzero(~dense).tolist():
+        rest = ~dense & ~tabled
+        if tabled.any():
+            parts.append(self._table_candidates(pos, finite, np.flatnonzero(tabled), rest))
+        for b in np.flatnonzero(rest).tolist():
             parts.append(self._candidates(pos[b], finite[b]) + b * nn)
         return parts[0] if len(parts) == 1 else np.sort(np.concatenate(parts))
+
+    def _table_candidates(
+        self, pos: np.ndarray, finite: np.ndarray, runs: np.ndarray, rest: np.ndarray
+    ) -> np.ndarray:
+        """Batch keys of the runs `runs`, whose robots keep neighbour tables, from one compiled
+        grid search over all of them; a run with a tie at some table's edge is marked in `rest`
+        for the k-d tree, whose choice among equals the grid search cannot know."""
+        n = self.n
+        r_rr, r_rf = self.candidate_range_m[_RR], self.candidate_range_m[_RF]
+        keys, tie = pair_kernels.table_candidates(
+            pos[runs, :n], finite[runs, :n], runs, self.fixed_m, self._ff_keys,
+            self.neighbour_table + 1, r_rr * r_rr, r_rf, self.n_nodes,
+        )  # fmt: skip
+        rest[runs[tie]] = True
+        return keys
 
     def _dense_candidates(self, pos: np.ndarray, finite: np.ndarray) -> np.ndarray:
         """(k, N, N) bool, upper triangle: the candidate pairs of k runs whose robots are all in
@@ -427,22 +450,17 @@ def update_nets(
     on[:, :n] &= up
 
     keys = net._candidate_keys(pos, finite)  # b * N^2 + i * N + j
-    node_i = keys // big_n  # b * N + i
-    run = node_i // big_n
-    i = node_i - run * big_n
-    j = keys - node_i * big_n
-    node_j = node_i + (j - i)
     old, prev = _previous_shadowing(nets, keys)
     last = np.stack([m._last_xy for m in nets])
     with np.errstate(invalid="ignore"):
         step = np.sqrt(np.sum((pos - last) ** 2, axis=2)).ravel()
     step[~np.isfinite(step)] = np.inf
-    shadow = _shadowing(net, old, prev, np.maximum(step[node_i], step[node_j]), run, rngs)
-
     px, py = pos[:, :, 0].ravel(), pos[:, :, 1].ravel()
-    dx, dy = px[node_i] - px[node_j], py[node_i] - py[node_j]
-    d = np.maximum(np.sqrt(dx * dx + dy * dy), MIN_DISTANCE_M)
-    margin = net._received_dbm(d, i, j) - shadow - net.radio.sensitivity_dbm
+    node_i, node_j, run, moved, d = pair_kernels.pair_geometry(keys, big_n, px, py, step, MIN_DISTANCE_M)
+    shadow = _shadowing(net, old, prev, moved, run, rngs)
+
+    first = run * big_n
+    margin = net._received_dbm(d, node_i - first, node_j - first) - shadow - net.radio.sensitivity_dbm
     on = on.ravel()
     works = (margin >= 0.0) & on[node_i] & on[node_j]
 
@@ -468,11 +486,7 @@ def _previous_shadowing(nets: Sequence[RadioNet], keys: np.ndarray) -> tuple[np.
     # all of them, when the candidate set did not change
     if np.array_equal(keys, old_keys):
         return np.ones(len(keys), dtype=bool), old_shadow
-    if not len(old_keys):
-        return np.zeros(len(keys), dtype=bool), np.zeros(len(keys))
-    where = np.minimum(np.searchsorted(old_keys, keys), len(old_keys) - 1)
-    old = old_keys[where] == keys
-    return old, np.where(old, old_shadow[where], 0.0)
+    return pair_kernels.carried_over(keys, old_keys, old_shadow)
 
 
 def _shadowing(
@@ -501,23 +515,12 @@ def _shadowing(
 
 def _links(net: RadioNet, k: int, u: np.ndarray, v: np.ndarray, margin: np.ndarray) -> list[Links]:
     """Each run's `Links` from the working pairs u < v (batch node ids ``b * N + i``, in key order)
-    of k runs: one CSR of the block-diagonal graph of all the runs, one component search and one
-    breadth-first search from all the sources on it."""
+    of k runs: one CSR of the block-diagonal graph of all the runs, then its components and the
+    hops from each run's source (`pair_kernels`)."""
     n, big_n = net.n, net.n_nodes
-    nodes = k * big_n
-    # lower triangle first: with the pairs in key order, a stable sort by row leaves every row's
-    # columns ascending (CSR order)
-    rows = np.concatenate([v, u]).astype(np.int32)
-    cols = np.concatenate([u, v]).astype(np.int32)
-    order = np.argsort(rows, kind="stable")
-    indices, margins = cols[order], np.concatenate([margin, margin])[order]
-    counts = np.bincount(rows, minlength=nodes)
-    indptr = np.zeros(nodes + 1, dtype=np.int32)
-    np.cumsum(counts, out=indptr[1:])
-    graph = _search_graph(indptr, indices, k, n, big_n)
-    component = _components(graph, k, big_n)
-    hops = _source_hops(graph, k, n, big_n)
-    degree = counts.reshape(k, big_n)[:, :n].astype(np.intp)
+    indptr, indices, margins, counts = pair_kernels.link_csr(u, v, margin, k * big_n)
+    component, hops = pair_kernels.components_and_hops(indptr, indices, k, n, big_n)
+    degree = counts.reshape(k, big_n)[:, :n]
     # each run's CSR in its own node ids: a link never leaves its run
     ends = indptr[np.arange(k + 1) * big_n]
     ptr = np.empty((k, big_n + 1), dtype=np.int32)
@@ -530,57 +533,3 @@ def _links(net: RadioNet, k: int, u: np.ndarray, v: np.ndarray, margin: np.ndarr
         Links(ptr[b], local[lo:hi], margins[lo:hi], degree[b], component[b], hops[b])
         for b, lo, hi in zip(range(k), ends[:-1], ends[1:], strict=True)
     ]
-
-
-def _search_graph(
-    indptr: np.ndarray, indices: np.ndarray, k: int, n: int, big_n: int
-) -> scipy.sparse.csr_matrix:
-    """The block-diagonal graph of the k runs' links, with unit weights (csgraph works on floats:
-    hand it them rather than have it convert a bool matrix). When the runs have a source, one more
-    node after them has an arc to every run's source: the hop search starts there; with no arc
-    into it, it is a component of its own, numbered after all the others."""
-    nodes = k * big_n
-    if big_n > n:
-        indptr = np.append(indptr, indptr[-1] + k).astype(np.int32)
-        indices = np.concatenate([indices, np.arange(k, dtype=np.int32) * big_n + n])
-        nodes += 1
-    return scipy.sparse.csr_matrix((np.ones(len(indices)), indices, indptr), shape=(nodes, nodes))
-
-
-def _components(graph: scipy.sparse.csr_matrix, k: int, big_n: int) -> np.ndarray:
-    """(k, N) connected-component labels of each run's graph, numbered within the run as a search
-    on that run alone numbers them: the search visits the block-diagonal graph's runs one after
-    another, so run b's labels are its own shifted by the components of the runs before it."""
-    # the matrix is symmetric, so "directed" saves a transpose, same answer
-    _, labels = connected_components(graph, directed=True, connection="strong")
-    labels = labels[: k * big_n].reshape(k, big_n)
-    return labels - labels.min(axis=1, keepdims=True) if big_n else labels
-
-
-def _source_hops(graph: scipy.sparse.csr_matrix, k: int, n: int, big_n: int) -> np.ndarray:
-    """(k, n) hops from each run's source (node n) to its robots, -1 when unreachable or there is
-    no source: one breadth-first search from the node linked to all the sources (`_search_graph`;
-    no run reaches another's nodes)."""
-    if big_n == n:
-        return np.full((k, n), -1, dtype=np.intp)
-    root = k * big_n
-    order, parent = breadth_first_order(graph, root, directed=True, return_predecessors=True)
-    depth = _depths(order, parent)
-    return np.maximum(depth[:root] - 1, -1).reshape(k, big_n)[:, :n]
-
-
-def _depths(order: np.ndarray, parent: np.ndarray) -> np.ndarray:
-    """Depth of every node in a breadth-first search tree from ``order[0]`` (-1: not reached).
-
-    The search visits the nodes level by level, each node's parent comes before it in `order` and
-    the parents' places never decrease along it: each level is the stretch of `order` whose parents
-    lie in the level before, found with one binary search."""
-    place = np.empty(len(parent), dtype=np.intp)
-    place[order] = np.arange(len(order))
-    parent_place = place[parent[order[1:]]]
-    depth = np.full(len(parent), -1, dtype=np.intp)
-    lo, hi, level = 0, 1, 0
-    while lo < hi:
-        depth[order[lo:hi]] = level
-        lo, hi, level = hi, 1 + int(np.searchsorted(parent_place, hi)), level + 1
-    return depth

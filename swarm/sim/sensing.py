@@ -72,7 +72,6 @@ from dataclasses import dataclass
 
 import numpy as np
 import shapely
-from scipy.spatial import cKDTree
 from shapely.geometry.base import BaseGeometry
 
 from swarm.mission import schema
@@ -82,13 +81,14 @@ from swarm.planning.detection import (
     inverse_cube_range_m,
     segment_distance,
 )
+from swarm.sim import pair_kernels
 from swarm.sim.mines import MineField
 
 #: The screen for robots near a mine allows this much movement within a step (m).
 SCREEN_MARGIN_M = 5.0
 _NEIGHBOUR_BINS = np.array([(i, j) for i in (-1, 0, 1) for j in (-1, 0, 1)], dtype=np.int64)
 _BIN_STRIDE = 1 << 31
-#: Up to this many robot-mine pairs, the near pairs come from a dense distance matrix.
+#: Up to this many robot-mine pairs, a run's looks are found with the batch's (`sensor_batch`).
 DENSE_PAIRS = 100_000
 #: A pass is decided early when its robot comes within this many trigger radii of the mine (never
 #: beyond the sensor's range): four radii is the 1 m the environment steers found mines clear by.
@@ -170,7 +170,6 @@ class MineSensor:
         if clutter_area is not None:
             shapely.prepare(clutter_area)
         self._m = len(minefield)
-        self._tree = cKDTree(minefield.positions_m) if self._m else None
         self._keys = np.empty(0, dtype=np.int64)  # robot * m + mine, sorted
         self._xmin = np.empty(0)  # closest approach so far, metres
         self._xdrawn = np.empty(0)  # the x a pass was last drawn at (inf: not yet; early decision)
@@ -299,16 +298,9 @@ class MineSensor:
         return start, end, r[keep], j[keep]
 
     def _near_pairs(self, points: np.ndarray, radius_m: float) -> tuple[np.ndarray, np.ndarray]:
-        """(point, mine) index pairs within `radius_m`: a dense distance check for small problems
-        (a few robots, a few tens of mines), the k-d trees beyond."""
-        mines = self.minefield.positions_m
-        if len(points) * len(mines) <= DENSE_PAIRS:
-            d2 = (points[:, None, 0] - mines[None, :, 0]) ** 2 + (points[:, None, 1] - mines[None, :, 1]) ** 2
-            r, j = np.nonzero(d2 <= radius_m * radius_m)
-            return r.astype(np.intp), j.astype(np.intp)
-        assert self._tree is not None
-        near = cKDTree(points).sparse_distance_matrix(self._tree, radius_m, output_type="ndarray")
-        return near["i"].astype(np.intp), near["j"].astype(np.intp)
+        """(point, mine) index pairs within `radius_m`, by point then mine: a compiled grid search
+        (`pair_kernels.near_pairs`), as the dense distance check it replaces."""
+        return pair_kernels.near_pairs(points, self.minefield.positions_m, radius_m)
 
     def _passes(
         self,

@@ -21,6 +21,7 @@ import math
 import numpy as np
 
 from swarm.planning.detection import inverse_cube_look
+from swarm.sim import pair_kernels
 from swarm.sim.comms import sorted_unique
 from swarm.sim.sensing import _NEIGHBOUR_BINS, DENSE_PAIRS, SCREEN_MARGIN_M, Detection, MineSensor
 
@@ -52,11 +53,6 @@ class SensorBatch:
 
     def dirty(self, b: int) -> None:
         self._dirty[b] = True
-
-    def _bins(self, xy: np.ndarray) -> np.ndarray:
-        """Screen bins (`_maybe_near`'s): exact for any point within 2^21 bins (10,000 km) of
-        the origin, which every robot on a map is."""
-        return np.floor(xy / self.size).astype(np.int64)
 
     @staticmethod
     def _bin_keys(bins: np.ndarray, run: np.ndarray | int) -> np.ndarray:
@@ -117,16 +113,12 @@ class SensorBatch:
         if self._dirty.any():
             self._refresh()
         who = np.flatnonzero(sensing)
-        run = who // n if self.runs > 1 else np.zeros(len(who), np.intp)
-        in_bins = np.zeros(len(who), bool)
-        if len(who) and len(self._keys):
-            keys = self._bin_keys(self._bins(xy[who]), run)
-            at = np.minimum(np.searchsorted(self._keys, keys), len(self._keys) - 1)
-            in_bins = self._keys[at] == keys
-        # a robot that jumped further than the screen's margin is looked at by its run's update
-        seg = xy[who] - last_xy[who]
-        with np.errstate(invalid="ignore"):
-            jumped = (seg[:, 0] * seg[:, 0] + seg[:, 1] * seg[:, 1]) > SCREEN_MARGIN_M**2
+        run = who // n
+        # robots in a bin next to a target of their run (`_maybe_near`'s screen; exact for any
+        # point within 2^21 bins, 10,000 km, of the origin, as every robot on a map is), and robots
+        # that jumped further than the screen's margin: those are looked at by their run's update
+        in_bins, jumped = pair_kernels.screen(xy, last_xy, who, n, self.size, self._keys, _BIN_OFFSET,
+                                              _RUN_STRIDE, SCREEN_MARGIN_M**2)  # fmt: skip
         busy = self._discrete.copy()  # a sensor that draws once per pass: its own update
         busy[run[in_bins]] = True
         busy[run[jumped]] = True
@@ -205,17 +197,14 @@ class SensorBatch:
         counts = np.append(cuts, len(run)) - firsts
         radius = self._range[ids] + np.maximum.reduceat(half, firsts)
         dense = counts * self._mine_count[ids] <= DENSE_PAIRS
-        radius2 = np.repeat(radius * radius, counts)
-        pos = self._mine_xy[run]  # (robots, width, 2)
-        d2 = (mid[:, None, 0] - pos[:, :, 0]) ** 2 + (mid[:, None, 1] - pos[:, :, 1]) ** 2
-        near = (d2 <= radius2[:, None]) & self._target[run]
-        if not dense.all():
-            near &= np.repeat(dense, counts)[:, None]
-        r, j = np.nonzero(near)  # robot then mine within each run: the order each run draws in
+        # a run with too many pairs for the dense check has no pairs here (-1: nothing that near)
+        radius2 = np.repeat(np.where(dense, radius * radius, -1.0), counts)
+        # robot then mine within each run: the order each run draws in
+        r, j = pair_kernels.runs_near_pairs(mid, run, self._mine_xy, self._target, radius2)
         at = [*np.searchsorted(run[r], ids).tolist(), len(r)]
         u = np.empty(len(r))
         for k, (b, is_dense) in enumerate(zip(ids.tolist(), dense.tolist(), strict=True)):
-            if not is_dense:  # too many pairs for the dense check: the run's own (k-d tree) way
+            if not is_dense:  # too many pairs for one pass over its mines: its own grid search
                 rows = slice(b * n, (b + 1) * n)
                 out[b] = self.sensors[b]._looks(xy[rows], sensing[rows], float(t_s[b]), rngs[b])
                 continue
@@ -224,7 +213,7 @@ class SensorBatch:
                 rngs[b].random(out=u[at[k] : at[k + 1]])
         if not len(r):
             return
-        look = inverse_cube_look(start[r], end[r], pos[r, j])
+        look = inverse_cube_look(start[r], end[r], self._mine_xy[run[r], j])
         hazard = self.sensors[int(ids[0])].sensor.width_m ** 2 / (8.0 * math.pi) * look
         hits = np.flatnonzero(u < -np.expm1(-hazard))
         if not len(hits):

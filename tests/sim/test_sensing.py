@@ -11,11 +11,13 @@ import math
 
 import numpy as np
 import pytest
+from scipy.spatial import cKDTree
 from shapely.geometry import box
 
 from swarm.mission.schema import LateralRange, Sensor
 from swarm.planning.coverage import detection_probability
 from swarm.planning.detection import INVERSE_CUBE_FLOOR
+from swarm.sim import pair_kernels
 from swarm.sim.mines import MineField
 from swarm.sim.sensing import (
     Detection,
@@ -396,3 +398,58 @@ def test_mines_lie_only_on_ground_that_can_be_crossed() -> None:
     west = float(np.mean(x[free] < np.median(x[free])))
     share = float(np.mean(mines[:, 0] < np.median(x[free])))
     assert abs(share - west) <= 4 * math.sqrt(west * (1 - west) / len(mines))
+
+
+@pytest.mark.parametrize("radius", [0.5, 7.0, 40.0])
+def test_near_pairs_are_the_dense_checks_and_the_k_d_trees(radius: float) -> None:
+    """The compiled grid search finds the pairs of a dense distance check, in its order, and the
+    pairs of the k-d tree's sparse distance matrix that a large field used to take."""
+    rng = np.random.default_rng(4)
+    mines = rng.uniform(0, 300, size=(150, 2))
+    points = np.concatenate([rng.uniform(-20, 320, size=(400, 2)), mines[:20] + 1e-3])
+    r, j = pair_kernels.near_pairs(points, mines, radius)
+    d2 = (points[:, None, 0] - mines[None, :, 0]) ** 2 + (points[:, None, 1] - mines[None, :, 1]) ** 2
+    want_r, want_j = np.nonzero(d2 <= radius * radius)
+    np.testing.assert_array_equal(r, want_r)
+    np.testing.assert_array_equal(j, want_j)
+    tree = cKDTree(points).sparse_distance_matrix(cKDTree(mines), radius, output_type="ndarray")
+    np.testing.assert_array_equal(np.sort(r * 1000 + j), np.sort(tree["i"] * 1000 + tree["j"]))
+
+
+def test_runs_near_pairs_are_the_dense_checks_of_each_run() -> None:
+    """The batch's pairs: each point against its own run's target mines (NaN padding never near)."""
+    rng = np.random.default_rng(6)
+    mines = rng.uniform(0, 100, size=(3, 12, 2))
+    mines[2, 8:] = np.nan
+    target = rng.random((3, 12)) < 0.7
+    run = np.sort(rng.integers(0, 3, 60))
+    points = rng.uniform(0, 100, size=(60, 2))
+    radius2 = rng.uniform(10, 30, 60) ** 2
+    r, j = pair_kernels.runs_near_pairs(points, run, mines, target, radius2)
+    pos = mines[run]
+    d2 = (points[:, None, 0] - pos[:, :, 0]) ** 2 + (points[:, None, 1] - pos[:, :, 1]) ** 2
+    want_r, want_j = np.nonzero((d2 <= radius2[:, None]) & target[run])
+    np.testing.assert_array_equal(r, want_r)
+    np.testing.assert_array_equal(j, want_j)
+
+
+def test_screen_is_the_bin_lookup_and_jump_check() -> None:
+    rng = np.random.default_rng(8)
+    n, size, offset, stride = 10, 7.5, 1 << 21, 1 << 44
+    xy = rng.uniform(-50, 150, size=(40, 2))
+    last = xy + rng.normal(0, 4, size=(40, 2))
+    last[::7] = np.nan
+    who = np.flatnonzero(rng.random(40) < 0.8)
+
+    def keys_of(pts: np.ndarray, run: np.ndarray) -> np.ndarray:
+        bins = np.floor(pts / size).astype(np.int64) + offset
+        return run.astype(np.int64) * stride + (bins[:, 0] << 22) + bins[:, 1]
+
+    keys = np.unique(keys_of(xy[who[::3]], who[::3] // n))
+    in_bins, jumped = pair_kernels.screen(xy, last, who, n, size, keys, offset, stride, 25.0)
+    np.testing.assert_array_equal(in_bins, np.isin(keys_of(xy[who], who // n), keys))
+    seg = xy[who] - last[who]
+    with np.errstate(invalid="ignore"):
+        np.testing.assert_array_equal(jumped, seg[:, 0] * seg[:, 0] + seg[:, 1] * seg[:, 1] > 25.0)
+    none, _ = pair_kernels.screen(xy, last, who, n, size, keys[:0], offset, stride, 25.0)
+    assert not none.any()
