@@ -28,10 +28,10 @@ def test_a_robot_off_its_leg_steers_back_onto_it() -> None:
     routes = Routes(1)
     routes.set(0, np.array([[0.0, 0.0], [900.0, 0.0]]))
     routes.cursor[0] += 1  # on the leg from (0, 0) to (900, 0)
-    target = routes.targets(np.array([[100.0, 2.0]]))[0]
+    target = routes.steer_points(np.array([[100.0, 2.0]]))[0]
     np.testing.assert_allclose(target, [100.0 + LOOKAHEAD_M, 0.0])
     # near the leg's end it steers for the end itself, and a robot beside the end has passed it
-    np.testing.assert_allclose(routes.targets(np.array([[899.5, 0.5]]))[0], [900.0, 0.0])
+    np.testing.assert_allclose(routes.steer_points(np.array([[899.5, 0.5]]))[0], [900.0, 0.0])
     routes.set(0, np.array([[0.0, 0.0], [900.0, 0.0], [900.0, 50.0]]))
     routes.cursor[0] += 1
     routes.advance(np.array([[900.4, 1.5]]), np.array([True]))
