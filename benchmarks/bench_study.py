@@ -5,6 +5,7 @@ per second one run at a time against its runs in batches on the batched simulato
     python benchmarks/bench_study.py [--mission missions/mine_clear.yaml] [--runs 8] [--seed 0]
                                      [--backends local ray] [--quiet-wait 60]
     python benchmarks/bench_study.py --batched [--runs 32] [--batch B] [--repeat 2] [--today-ref REF]
+                                     [--table-ref REF]
 
 Batched (issue 13's target: at least 20 times today's runs/s on one worker, the same table): the
 same study on one local worker, today's way and batched, alternately `--repeat` times (the machine
@@ -14,7 +15,9 @@ of git commit REF (`git archive` into a temporary folder, run in a fresh Python 
 folder first on its path). Batched is `run_study(..., batch=B)` (B automatic by default: each
 point's runs in batches of up to 64). Both plan the point once (each in its own fresh state) and
 write every file; the rate is runs / wall time of the `run_study` call, the ratio batched / today.
-Check: the two results tables are identical apart from runtime_s.
+Check: the two results tables are identical apart from runtime_s (with `--table-ref REF`, batched's
+against the code of commit REF's instead: a behaviour change made after today's commit on purpose,
+such as issue 12's fix 84e3d4d, changes a run's row without being a speed-up's doing).
 
 The study: the mission as written (no sweeps: one parameter point), `--runs` runs, seed `--seed`.
 The default mission is the shipped `missions/mine_clear.yaml` (24 robots, about 10-15 s per run
@@ -295,11 +298,7 @@ def batched_main(args: argparse.Namespace) -> None:
         tmp_path = Path(tmp)
         src = tmp_path / "today-src"
         if args.today_ref:
-            src.mkdir()
-            archive = subprocess.run(
-                ["git", "archive", args.today_ref], cwd=ROOT, capture_output=True, check=True
-            )
-            subprocess.run(["tar", "-x", "-C", str(src)], input=archive.stdout, check=True)
+            _unpack(args.today_ref, src)
         rows = []
         tables: dict[str, pa.Table] = {}
         for k in range(args.repeat):
@@ -321,6 +320,11 @@ def batched_main(args: argparse.Namespace) -> None:
                     f"meanwhile; waited {waited:.0f} s)",
                     flush=True,
                 )
+        if args.table_ref:
+            _unpack(args.table_ref, tmp_path / "table-src")
+            _, tables["reference"] = measure_today(
+                spec, args.table_ref, tmp_path / "table-src", tmp_path / "reference"
+            )
     print()
     best = {
         w: max(args.runs / wall for which, _, wall, _ in rows if which == w) for w in ("today", "batched")
@@ -336,11 +340,29 @@ def batched_main(args: argparse.Namespace) -> None:
     print(f"{'ratio':<8} {ratio:>12.1f}x {ratio_mean:>12.1f}x")
     verdict = "PASS" if ratio >= TARGET_BATCHED else "FAIL"
     print(f"{verdict}  batched {ratio:.1f}x today's runs/s on one worker (target >= {TARGET_BATCHED:g}x)")
-    diff = _differences(tables["today"], tables["batched"])
+    against = f"git {args.table_ref}" if args.table_ref else "today"
+    reference = tables["reference" if args.table_ref else "today"]
+    diff = _differences(reference, tables["batched"])
     if diff:
-        print(f"FAIL  results.parquet differ apart from runtime_s: {', '.join(diff)}")
+        runs = _differing_runs(reference, tables["batched"])
+        print(f"FAIL  results.parquet differ from {against}'s apart from runtime_s: {', '.join(diff)}")
+        print(f"      in runs {runs}")
     else:
-        print(f"PASS  results.parquet identical apart from runtime_s ({tables['today'].num_rows} rows)")
+        rows = reference.num_rows
+        print(f"PASS  results.parquet identical to {against}'s apart from runtime_s ({rows} rows)")
+
+
+def _unpack(ref: str, dest: Path) -> None:
+    """The code of git commit `ref` into `dest` (`git archive`)."""
+    dest.mkdir()
+    archive = subprocess.run(["git", "archive", ref], cwd=ROOT, capture_output=True, check=True)
+    subprocess.run(["tar", "-x", "-C", str(dest)], input=archive.stdout, check=True)
+
+
+def _differing_runs(a: pa.Table, b: pa.Table) -> list[int]:
+    """The `run` numbers of the rows in which two tables of the same runs differ."""
+    rows_a = {r["run"]: r for r in a.to_pylist()}
+    return sorted(r["run"] for r in b.to_pylist() if rows_a.get(r["run"]) != r)
 
 
 def _differences(a: pa.Table, b: pa.Table) -> list[str]:
@@ -367,6 +389,11 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--repeat", type=int, default=2, help="--batched: alternations of today and batched")
     ap.add_argument(
         "--today-ref", help="--batched: today is the code of this git commit (default: --batch 1)"
+    )
+    ap.add_argument(
+        "--table-ref",
+        help="--batched: compare the results table with this commit's instead of today's (a "
+        "behaviour change since today, such as issue 12's fix 84e3d4d, is not a speed-up's)",
     )
     args = ap.parse_args(argv)
     if args.batched:
