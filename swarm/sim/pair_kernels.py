@@ -308,39 +308,40 @@ def components_and_hops(
     queue = np.empty(big_n, np.int64)
     for b in range(k):
         base = b * big_n
+        depth[:] = -1  # reached nodes keep theirs: each search covers one component
         label = 0
         for s in range(big_n):
-            if component[b, s] >= 0:
-                continue
-            component[b, s] = label
-            queue[0] = s
-            head, tail = 0, 1
-            while head < tail:
-                a = queue[head]
-                head += 1
-                for e in range(indptr[base + a], indptr[base + a + 1]):
-                    c = indices[e] - base
-                    if component[b, c] < 0:
-                        component[b, c] = label
-                        queue[tail] = c
-                        tail += 1
-            label += 1
+            if depth[s] < 0:
+                reached = _breadth_first(indptr, indices, base, s, depth, queue)
+                component[b, queue[:reached]] = label
+                label += 1
         if big_n > n:
             depth[:] = -1
-            depth[n] = 0
-            queue[0] = n
-            head, tail = 0, 1
-            while head < tail:
-                a = queue[head]
-                head += 1
-                for e in range(indptr[base + a], indptr[base + a + 1]):
-                    c = indices[e] - base
-                    if depth[c] < 0:
-                        depth[c] = depth[a] + 1
-                        queue[tail] = c
-                        tail += 1
+            _breadth_first(indptr, indices, base, n, depth, queue)
             hops[b] = depth[:n]
     return component, hops
+
+
+@numba.njit(cache=True, inline="always")
+def _breadth_first(
+    indptr: np.ndarray, indices: np.ndarray, base: int, start: int, depth: np.ndarray, queue: np.ndarray
+) -> int:
+    """Breadth-first search from local node `start` of the run whose nodes begin at row `base`:
+    `depth` of each node reached (unreached ones must be -1 and stay so), the nodes reached in
+    order in `queue`; returns how many."""
+    depth[start] = 0
+    queue[0] = start
+    head, tail = 0, 1
+    while head < tail:
+        a = queue[head]
+        head += 1
+        for e in range(indptr[base + a], indptr[base + a + 1]):
+            c = indices[e] - base
+            if depth[c] < 0:
+                depth[c] = depth[a] + 1
+                queue[tail] = c
+                tail += 1
+    return tail
 
 
 @numba.njit(cache=True)
