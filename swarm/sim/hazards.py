@@ -80,6 +80,7 @@ from shapely.geometry.base import BaseGeometry
 
 from swarm.mission import schema
 from swarm.robot.terrain import TerrainLibrary
+from swarm.sim import draws
 from swarm.sim.mines import MineField, sample_in
 
 #: Why a robot was lost; `Losses.cause` indexes this tuple.
@@ -413,7 +414,7 @@ class HazardModel:
         In a batch, `rng` is one generator per run and `runs` the runs stepped (all by default):
         the inputs hold their robots' rows, run after run."""
         runs = list(range(self.runs)) if runs is None else [int(b) for b in runs]
-        gens = [rng] if isinstance(rng, np.random.Generator) else list(rng)
+        gens = [rng] if isinstance(rng, np.random.Generator) else rng
         if len(gens) != len(runs):
             raise ValueError(f"hazards: {len(gens)} generators for {len(runs)} runs")
         n = self.n
@@ -421,8 +422,8 @@ class HazardModel:
         self._check(inp, size)
         # fixed shape per run: see "Determinism" above
         u = np.empty((size, N_UNIFORMS))
-        for k, g in enumerate(gens):
-            g.random(out=u[k * n : (k + 1) * n])
+        each = n * N_UNIFORMS
+        draws.fill_uniform(gens, np.arange(len(runs)), np.arange(len(runs) + 1) * each, u.reshape(-1))
         if not self.hazards.enabled:
             none = np.full(size, NO_LOSS, dtype=np.int64)
             return Losses(cause=none, mine=np.full(size, -1, dtype=np.int64), radio_dropped=none >= 0)

@@ -21,7 +21,7 @@ import math
 import numpy as np
 
 from swarm.planning.detection import inverse_cube_look
-from swarm.sim import pair_kernels
+from swarm.sim import draws, pair_kernels
 from swarm.sim.comms import sorted_unique
 from swarm.sim.sensing import _NEIGHBOUR_BINS, DENSE_PAIRS, SCREEN_MARGIN_M, Detection, MineSensor
 
@@ -201,16 +201,14 @@ class SensorBatch:
         radius2 = np.repeat(np.where(dense, radius * radius, -1.0), counts)
         # robot then mine within each run: the order each run draws in
         r, j = pair_kernels.runs_near_pairs(mid, run, self._mine_xy, self._target, radius2)
-        at = [*np.searchsorted(run[r], ids).tolist(), len(r)]
+        at = np.append(np.searchsorted(run[r], ids), len(r))
+        for b in ids[~dense].tolist():  # too many pairs for one pass over its mines: its own grid search
+            rows = slice(b * n, (b + 1) * n)
+            out[b] = self.sensors[b]._looks(xy[rows], sensing[rows], float(t_s[b]), rngs[b])
+        out.update({b: [] for b in ids[dense].tolist()})
+        # each run's uniforms in its pairs' order (a run without pairs, dense or not, draws none)
         u = np.empty(len(r))
-        for k, (b, is_dense) in enumerate(zip(ids.tolist(), dense.tolist(), strict=True)):
-            if not is_dense:  # too many pairs for one pass over its mines: its own grid search
-                rows = slice(b * n, (b + 1) * n)
-                out[b] = self.sensors[b]._looks(xy[rows], sensing[rows], float(t_s[b]), rngs[b])
-                continue
-            out[b] = []
-            if at[k + 1] > at[k]:
-                rngs[b].random(out=u[at[k] : at[k + 1]])
+        draws.fill_uniform(rngs, ids, at, u)
         if not len(r):
             return
         look = inverse_cube_look(start[r], end[r], self._mine_xy[run[r], j])

@@ -35,6 +35,7 @@ import math
 from collections.abc import Sequence
 
 import numpy as np
+from numba.typed import List
 from scipy.spatial import cKDTree
 
 from swarm.errors import SwarmError
@@ -135,7 +136,13 @@ class World:
         self.wave_phase_s = np.zeros(b)
         self.next_comms_s = np.zeros(b)  # each run's next radio update (s)
         self.links_version = np.zeros(b, dtype=np.int64)  # each run's radio updates so far
+        # runs whose score is looked at every step (timed criteria), and runs whose counts
+        # (detections, recoveries) changed since it was last looked at, or that just began
+        self.score_timed = np.zeros(b, bool)
+        self.score_stale = np.ones(b, bool)
+        self.beach_started = np.zeros(b, bool)  # each run's `score.beach_start_s` is known
         self._streams: dict[str, list] = {}  # each run's generator of a stream, by stream
+        self._typed_streams: dict[str, List] = {}  # the same, for compiled loops (`draws`)
         self.routes = Routes(b * n)
         self._sense_xy = np.full((b * n, 2), np.nan)  # each sensor's last positions (views)
         self._flat: dict[str, np.ndarray] = {}
@@ -189,7 +196,9 @@ class World:
         ss = np.random.SeedSequence(seed) if seed is not None or prev is None else prev.spawn(1)[0]
         run.seed_seq = ss
         run.rngs = dict(zip(STREAMS, (np.random.default_rng(c) for c in ss.spawn(len(STREAMS))), strict=True))
-        self._streams.clear()
+        for kept in (self._streams, self._typed_streams):
+            for name, gens in kept.items():
+                gens[b] = run.rngs.get(name)
         run.seed = seed
         run.router.calls = 0  # replanning seeds count from the episode's start
         self.t_s[b] = 0.0
@@ -254,6 +263,9 @@ class World:
         redundancy = s.relay_task.redundancy if s.relay_task is not None else None
         run.score = MissionScore(m, redundancy, len(run.minefield))
         run.score_prev = 0.0
+        self.score_timed[b] = run.score.timed
+        self.score_stale[b] = True
+        self.beach_started[b] = False
         run.cleared = False
         run.events = []
         run.phase_seen = set()
@@ -297,6 +309,14 @@ class World:
         gens = self._streams.get(name)
         if gens is None:
             gens = self._streams[name] = [run.rngs.get(name) for run in self.runs]
+        return gens
+
+    def stream_typed(self, name: str) -> List:
+        """`stream(name)` as a `numba.typed.List`, for draws in compiled loops (`swarm.sim.draws`);
+        every run has each of `STREAMS`."""
+        gens = self._typed_streams.get(name)
+        if gens is None:
+            gens = self._typed_streams[name] = List(self.stream(name))
         return gens
 
     def advance(self, wheels: np.ndarray, jet: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -499,7 +519,7 @@ class World:
         sensing_now = self.alive & self.on_map & (self.phase >= BEACH)
         xy = self.flat("robot_state")[:, :2]
         flat_sensing = sensing_now.ravel() & np.isfinite(xy).all(axis=1)
-        rngs = self.stream("sensing")
+        rngs = self.stream_typed("sensing")
         found = self.sensors.step(
             xy,
             self._sense_xy,
@@ -515,6 +535,7 @@ class World:
                 self.sensors.dirty(b)
                 run = self.runs[b]
                 run.score.detected = np.count_nonzero(run.minefield.detected)
+                self.score_stale[b] = True
             for det in found[b]:
                 self._report(self.runs[b], det)
 
@@ -634,8 +655,9 @@ class World:
         (a row per robot of those runs)."""
         assert self.hazard_model is not None
         n = self.n
-        gens = self.stream("hazards")
-        losses = self.hazard_model.step(inp, gens if len(runs) == self.B else [gens[b] for b in runs], runs)
+        every = len(runs) == self.B
+        gens = self.stream_typed("hazards") if every else [self.stream("hazards")[b] for b in runs]
+        losses = self.hazard_model.step(inp, gens, runs)
         radio_ok = self.radio_ok[runs].reshape(-1) & ~losses.radio_dropped
         self.radio_ok[runs] = radio_ok.reshape(len(runs), n)
         alive = self.alive[runs].reshape(-1)
@@ -692,21 +714,29 @@ class World:
             self.phase[b, i] = DONE
             terminated[b, i] = True
             run.score.recovered += 1
+            self.score_stale[b] = True
             run.log_event("recovered", int(i))
 
     def _score(self, live: list[int], time_up: np.ndarray) -> np.ndarray:
+        """Advance the live runs' scores; (B,) each run's change of score this step. Only runs
+        with something to do are visited: a run without timed criteria whose counts did not
+        change, that is not ending and whose beach start is known, scores what it scored."""
         ashore = self.alive & self.on_map & (self.phase >= BEACH)
-        any_ashore = ashore.any(axis=1).tolist()
+        has_ashore = ashore.any(axis=1)
+        due = self.score_timed | self.score_stale | time_up | (has_ashore & ~self.beach_started)
+        any_ashore = has_ashore.tolist()
         ended = time_up.tolist()
         times = self.t_s.tolist()
         change = np.zeros(self.B)
         dt = self.dt_s
-        for b in live:
+        self.score_stale[live] = False
+        for b in np.asarray(live)[due[live]].tolist():
             run = self.runs[b]
             score = run.score
             t = times[b]
             if score.beach_start_s is None and any_ashore[b]:
                 score.beach_start_s = t
+                self.beach_started[b] = True
             if score.timed:
                 needs_xy = bool(score.zones or score.surveillance or score.beacons)
                 xy = self.robot_state[b][ashore[b], :2] if needs_xy else _NO_XY

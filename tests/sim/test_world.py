@@ -164,3 +164,27 @@ def test_resetting_some_runs_leaves_the_others_alone(mission_and_plan) -> None:
     assert w.runs[0].events == lone_a.runs[0].events
     assert np.array_equal(w.robot_state[1], lone_b.robot_state[0])
     assert w.runs[1].events == lone_b.runs[0].events
+
+
+def test_the_score_changes_add_up_to_the_score_computed_afresh(tmp_path) -> None:
+    """A search-only mission's score is looked at only in runs whose counts changed: each step's
+    change of a run's score (the reward's mission part) still adds up to its score computed
+    afresh, run by run."""
+    path = write_mission(tmp_path, "search", swarm={"count": 10}, tasks=[TASKS[1]], hazards=HAZARDS,
+                         phases=PHASES)  # fmt: skip
+    mission = load_mission(path)
+    plan = plan_mission(mission, seed=1, workers=1)
+    world = World(MissionSetup(mission, plan, dt_s=0.5, substep_s=0.25), 3)
+    world.reset(SEEDS)
+    assert not world.score_timed.any()
+    total = np.zeros(3)
+    for _ in range(600):
+        wheels, jet = world.controller_commands()
+        ended, up, change = world.advance(wheels, jet)
+        total += change
+        world.finish(ended, up)
+        if not world.in_agents.any():
+            break
+    fresh = np.array([run.score._score() for run in world.runs])
+    assert fresh.max() > 0  # mines were found
+    assert np.allclose(total, fresh, rtol=0, atol=1e-12)
