@@ -127,10 +127,9 @@ class Observer:
         for the runs whose objects are few (all of them in one pass), a k-d tree where many."""
         n = self.n
         dense: list[int] = []
-        for j, b in enumerate(runs):
+        for j in np.flatnonzero(world.object_count[runs] > 0).tolist():
+            b = runs[j]
             run = world.runs[b]
-            if not len(run.object_marker):
-                continue
             count = int(np.count_nonzero(run.object_marker < 0))
             if not count:
                 continue

@@ -73,6 +73,18 @@ class RunView:
         self.seed: int | None = None
         self.events: list[dict] = []
         self.end_reason: list[str | None] = [None] * self.n
+        self._object_marker = np.empty(0, dtype=np.int64)
+
+    @property
+    def object_marker(self) -> np.ndarray:
+        """(objects,) the robot marking each object found (-1: none yet)."""
+        return self._object_marker
+
+    @object_marker.setter
+    def object_marker(self, marker: np.ndarray) -> None:
+        # the objects found change with it: the world keeps every run's count (`Observer` reads it)
+        self._object_marker = marker
+        self.world.object_count[self.b] = len(marker)
 
     @property
     def links_version(self) -> int:

@@ -50,6 +50,7 @@ class SensorBatch:
         self._mine_count = np.zeros(self.runs, np.int64)
         self._range = np.zeros(self.runs)
         self._discrete = np.zeros(self.runs, bool)  # a sensor that is not `continuous`
+        self._present = np.zeros(self.runs, bool)  # a run with a sensor
 
     def dirty(self, b: int) -> None:
         self._dirty[b] = True
@@ -74,6 +75,7 @@ class SensorBatch:
             self._target[b] = False
             self._mine_count[b] = 0 if s is None else s._m
             self._discrete[b] = s is not None and not s.continuous
+            self._present[b] = s is not None
             if s is not None and s._m:
                 field = s.minefield
                 target = field.active & ~field.detected
@@ -83,10 +85,11 @@ class SensorBatch:
                 if target.any():
                     bins = np.floor(field.positions_m[target] / self.size).astype(np.int64)
                     around = (bins[:, None, :] + _NEIGHBOUR_BINS[None, :, :]).reshape(-1, 2)
-                    keys = self._bin_keys(around, b)
+                    keys = sorted_unique(self._bin_keys(around, b))
             self._per_run[b] = keys
         self._dirty[:] = False
-        self._keys = sorted_unique(np.concatenate(self._per_run))
+        # the run is the keys' leading part (`_RUN_STRIDE`), so runs in order are sorted keys
+        self._keys = np.concatenate(self._per_run)
 
     def step(
         self,
@@ -134,25 +137,21 @@ class SensorBatch:
             stepped = np.zeros(self.runs, bool)
             stepped[runs] = True
             busy &= stepped
-        # every other run's sensor is continuous (so it has no passes in progress) with no robot
-        # near a target, none that jumped and no false alarm to draw for: it has nothing to do
-        busy_runs = np.flatnonzero(busy).tolist()
-        near_run, jump_run, alarm_run = near_run.tolist(), jump_run.tolist(), alarm_run.tolist()
-        looks: list[int] = []
-        for b in busy_runs:
+        # every other run's sensor is continuous with no robot near a target, none that jumped and
+        # no false alarm to draw for: it has nothing to do (a continuous sensor never has passes
+        # in progress: only `MineSensor._passes` keeps them)
+        busy &= self._present
+        own = busy & (self._discrete | jump_run)  # through the run's own update
+        rest = busy & ~own
+        look = rest & near_run & (self._mine_count > 0)
+        for b in np.flatnonzero(own).tolist():
             s = self.sensors[b]
-            if s is None:
-                continue
-            if not s.continuous or jump_run[b] or len(s._keys):
-                if near_run[b] or jump_run[b] or alarm_run[b] or len(s._keys):
-                    rows = slice(b * n, (b + 1) * n)
-                    out[b] = s.update(xy[rows], sensing[rows], distance_m[rows], float(t_s[b]), rngs[b],
-                                      alive=alive[rows])  # fmt: skip
-                continue
-            if near_run[b] and s._m:
-                looks.append(b)
-            elif alarm_run[b]:
-                out[b] = []
+            if near_run[b] or jump_run[b] or alarm_run[b] or len(s._keys):
+                rows = slice(b * n, (b + 1) * n)
+                out[b] = s.update(xy[rows], sensing[rows], distance_m[rows], float(t_s[b]), rngs[b],
+                                  alive=alive[rows])  # fmt: skip
+        out.update({b: [] for b in np.flatnonzero(rest & ~look & alarm_run).tolist()})
+        looks = np.flatnonzero(look).tolist()
         if len(looks) == 1:  # one run looks: its own `_looks`, the same draws
             b = looks[0]
             rows = slice(b * n, (b + 1) * n)
@@ -161,9 +160,9 @@ class SensorBatch:
             wanted = np.zeros(self.runs, bool)
             wanted[looks] = True
             self._looks(xy, last_xy, sensing, who[wanted[run] & in_bins], t_s, rngs, out)
-        for b in busy_runs if self.false_alarms else ():  # false alarms after the looks, same stream
+        for b in np.flatnonzero(rest).tolist() if self.false_alarms else ():  # after the looks
             s = self.sensors[b]
-            if s is not None and s.continuous and b in out and not (jump_run[b] or len(s._keys)):
+            if b in out:
                 rows = slice(b * n, (b + 1) * n)
                 out[b] = out[b] + s._false_alarms(
                     xy[rows], sensing[rows], distance_m[rows], float(t_s[b]), rngs[b]

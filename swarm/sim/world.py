@@ -141,6 +141,7 @@ class World:
         self.score_timed = np.zeros(b, bool)
         self.score_stale = np.ones(b, bool)
         self.beach_started = np.zeros(b, bool)  # each run's `score.beach_start_s` is known
+        self.object_count = np.zeros(b, dtype=np.int64)  # each run's objects found (`RunView`)
         self._streams: dict[str, list] = {}  # each run's generator of a stream, by stream
         self._typed_streams: dict[str, List] = {}  # the same, for compiled loops (`draws`)
         self.routes = Routes(b * n)
