@@ -75,6 +75,8 @@ GROUND_SUBMERSION = 0.3
 STATION_KEEP_M = 1.0
 #: Seconds between trajectory samples kept for rendering tracks.
 TRACK_SAMPLE_S = 5.0
+#: Batches of this many runs or more draw from a typed list of their generators (`stream_typed`).
+TYPED_STREAMS_MIN_RUNS = 32
 #: The streams a run's seed is spawned into, in this order (`reset`).
 STREAMS = ("mines", "waves", "sensing", "radio", "hazards", "policy", "rocks")
 
@@ -312,9 +314,13 @@ class World:
             gens = self._streams[name] = [run.rngs.get(name) for run in self.runs]
         return gens
 
-    def stream_typed(self, name: str) -> List:
-        """`stream(name)` as a `numba.typed.List`, for draws in compiled loops (`swarm.sim.draws`);
-        every run has each of `STREAMS`."""
+    def stream_typed(self, name: str) -> List | list:
+        """`stream(name)` for draws in compiled loops (`swarm.sim.draws`): a `numba.typed.List` in
+        batches of `TYPED_STREAMS_MIN_RUNS` runs or more, else the plain list (a process's first
+        typed list costs 0.4 s of compilation, more than a small batch's draws save). Every run
+        has each of `STREAMS`."""
+        if self.B < TYPED_STREAMS_MIN_RUNS:
+            return self.stream(name)
         gens = self._typed_streams.get(name)
         if gens is None:
             gens = self._typed_streams[name] = List(self.stream(name))

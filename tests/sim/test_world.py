@@ -11,6 +11,7 @@ from tiny_missions import write_mission
 
 from swarm.mission.load import load_mission
 from swarm.mission.plan import plan_mission
+from swarm.sim import world as world_module
 from swarm.sim.run import MissionLog, simulate, simulate_batch
 from swarm.sim.runview import RunView
 from swarm.sim.setup import MissionSetup
@@ -138,9 +139,12 @@ def test_the_policy_reads_a_run_through_its_view_only() -> None:
     assert "RunView" in source and isinstance(RunView, type)
 
 
-def test_resetting_some_runs_leaves_the_others_alone(mission_and_plan) -> None:
+@pytest.mark.parametrize("typed_streams", [True, False], ids=["typed streams", "plain streams"])
+def test_resetting_some_runs_leaves_the_others_alone(mission_and_plan, typed_streams, monkeypatch) -> None:
     """A run reset in the middle of a batch (autoreset) starts over from its seed exactly; the
-    others go on as if nothing happened."""
+    others go on as if nothing happened (with the runs' generators in a typed list for compiled
+    draws, as large batches keep them, and in a plain list)."""
+    monkeypatch.setattr(world_module, "TYPED_STREAMS_MIN_RUNS", 1 if typed_streams else 10**9)
     mission, plan = mission_and_plan
     setup = MissionSetup(mission, plan, dt_s=0.5, substep_s=0.25)
 
@@ -164,6 +168,9 @@ def test_resetting_some_runs_leaves_the_others_alone(mission_and_plan) -> None:
     assert w.runs[0].events == lone_a.runs[0].events
     assert np.array_equal(w.robot_state[1], lone_b.robot_state[0])
     assert w.runs[1].events == lone_b.runs[0].events
+    for run, lone in ((w.runs[0], lone_a.runs[0]), (w.runs[1], lone_b.runs[0])):  # every draw made
+        for name, gen in run.rngs.items():
+            assert gen.bit_generator.state == lone.rngs[name].bit_generator.state, name
 
 
 def test_the_score_changes_add_up_to_the_score_computed_afresh(tmp_path) -> None:
