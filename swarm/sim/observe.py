@@ -20,6 +20,7 @@ from scipy.spatial import cKDTree
 
 from swarm.sim.control import to_body
 from swarm.sim.layout import ELEVATION_CLIP_M, ROLES, ObservationLayout
+from swarm.sim.physics_kernels import cell_index
 from swarm.sim.runview import FOLLOW, RETURN
 from swarm.sim.setup import MissionSetup
 
@@ -73,7 +74,7 @@ class Observer:
         _fill(
             out, rows, n, world.robot_state, world.energy_wh, world.inverted, world.submersion,
             world.slip, world.phase, float(self.capacity_wh), fx, fy, self.patch_grid,
-            float(bm.origin_m[0]), float(bm.origin_m[1]), float(bm.cell_m), bm.shape[0], bm.shape[1],
+            float(bm.origin_m[0]), float(bm.origin_m[1]), 1.0 / bm.cell_m, bm.shape[0], bm.shape[1],
             world.link_degree, world.source_hops, world.isolated_s, world.role, world.command,
             FOLLOW, RETURN, routes.points, routes.start, routes.end, routes.cursor, world.target_m,
             world.marking, self._tables, self._linked, on, sl["patch_speed"].start,
@@ -155,7 +156,7 @@ class Observer:
 @numba.njit(cache=True, error_model="numpy")
 def _fill(
     out, rows, n, state, energy, inverted, submersion, slip, phase, capacity,
-    fx, fy, grid, origin_x, origin_y, cell_m, grid_rows, grid_cols,
+    fx, fy, grid, origin_x, origin_y, inv_cell, grid_rows, grid_cols,
     degree, hops, isolated, role, command, follow, ret, points, start, end, cursor, target, marking,
     tables, linked, here, patch_at, neighbours_at, links_at, task_at, n_roles,
 ):  # fmt: skip
@@ -181,16 +182,16 @@ def _fill(
         line[9] = submersion[b, i]
         line[10] = min(max(np.float32(slip[b, i]), np.float32(0.0)), np.float32(1.0))
         line[11 + phase[b, i]] = 1.0
-        # the terrain patch in the body frame, one cell per sample
+        # the terrain patch in the body frame, one cell per sample: the cell the physics reads there
         for q in range(k2):
             px = x + c * fx[q] - s * fy[q]
             py = y + s * fx[q] + c * fy[q]
-            cells[q] = _cell(px, py, origin_x, origin_y, cell_m, grid_rows, grid_cols)
+            cells[q] = cell_index(px, py, origin_x, origin_y, inv_cell, grid_rows, grid_cols)
             line[patch_at + q] = grid[cells[q], 0]
         if mid >= 0:
             here_elev = grid[cells[mid], 1]
         else:
-            here_elev = grid[_cell(x, y, origin_x, origin_y, cell_m, grid_rows, grid_cols), 1]
+            here_elev = grid[cell_index(x, y, origin_x, origin_y, inv_cell, grid_rows, grid_cols), 1]
         for q in range(k2):
             d = grid[cells[q], 1] - here_elev
             line[patch_at + k2 + q] = min(max(d, np.float32(-ELEVATION_CLIP_M)), np.float32(ELEVATION_CLIP_M))
@@ -231,14 +232,6 @@ def _fill(
         length = end[row] - start[row]  # the fraction of its route's waypoints passed, 1 without one
         line[task_at + n_roles + 3] = (cursor[row] - start[row]) / max(length, 1) if length > 0 else 1.0
         line[task_at + n_roles + 4] = marking[b, i] >= 0
-
-
-@numba.njit(cache=True, error_model="numpy", inline="always")
-def _cell(x, y, origin_x, origin_y, cell_m, grid_rows, grid_cols):
-    """Row-major index of the cell under a point (the nearest edge cell outside the map)."""
-    col = min(max(int((x - origin_x) / cell_m), 0), grid_cols - 1)
-    r = min(max(int((y - origin_y) / cell_m), 0), grid_rows - 1)
-    return r * grid_cols + col
 
 
 @numba.njit(cache=True, error_model="numpy")

@@ -129,7 +129,7 @@ def sign(a: float) -> float:
 
 
 @njit(cache=True, error_model="numpy")
-def _cell(x: float, y: float, x0: float, y0: float, inv_cell: float, rows: int, cols: int) -> int:
+def cell_index(x: float, y: float, x0: float, y0: float, inv_cell: float, rows: int, cols: int) -> int:
     """`Physics._cells` of one point."""
     col = min(max(int((x - x0) * inv_cell), 0), cols - 1)
     row = min(max(int((y - y0) * inv_cell), 0), rows - 1)
@@ -295,7 +295,7 @@ def start(
             omega[i, 0], omega[i, 1] = -cmd[i, 1], -cmd[i, 0]
         else:
             omega[i, 0], omega[i, 1] = cmd[i, 0], cmd[i, 1]
-        here = _cell(state[i, 0], state[i, 1], *grid)
+        here = cell_index(state[i, 0], state[i, 1], *grid)
         c = terrain[here]
         cell[i], cls[i] = here, c
         heading, u, v, r = state[i, 2], state[i, 3], state[i, 4], state[i, 5]
@@ -411,7 +411,7 @@ def _move_pass(
         cos_m, sin_m = math.cos(mid), math.sin(mid)
         x_new = x + h * (u_new * cos_m - v_new * sin_m)
         y_new = y + h * (u_new * sin_m + v_new * cos_m)
-        to = _cell(x_new, y_new, *grid)
+        to = cell_index(x_new, y_new, *grid)
         to_cls = terrain[to]
         if impassable[to_cls] and to != here:  # undo the move into an obstacle, keep the turn
             x_new, y_new, u_new, v_new = x, y, 0.0, 0.0

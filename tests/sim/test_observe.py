@@ -101,8 +101,8 @@ def test_observing_some_runs_gives_their_rows_of_all(vec) -> None:
 @pytest.mark.parametrize("size", [3, 4], ids=["odd", "even"])
 def test_terrain_patch_samples_the_cells_around_each_robot_in_its_body_frame(tmp_path, size) -> None:
     """Sample (i, j) lies (i - (k-1)/2) h forward and (j - (k-1)/2) h left of the robot; its speed
-    fraction and its elevation above the robot's own cell come from the cell under it (the nearest
-    edge cell off the map)."""
+    fraction and its elevation above the robot's own cell come from the cell under it, the one the
+    physics drives on there (the nearest edge cell off the map)."""
     path = write_mission(tmp_path, "patch", swarm={"count": ROBOTS})
     config = swarm.sim.SimConfig(patch_size=size, patch_spacing_m=1.5)
     env = swarm.sim.vector_env(mission=path, num_envs=2, seed=5, config=config)
@@ -112,12 +112,11 @@ def test_terrain_patch_samples_the_cells_around_each_robot_in_its_body_frame(tmp
         obs, *_ = env.step(rng.uniform(-1.0, 1.0, (2, ROBOTS, 3)).astype(np.float32))
     setup = env.observer.setup
     beach, speed = setup.beach, setup.speed_grid
-    rows, cols = beach.shape
+    cols = beach.shape[1]
 
-    def cell(x: float, y: float) -> tuple[int, int]:
-        c = min(max(int((x - beach.origin_m[0]) / beach.cell_m), 0), cols - 1)
-        r = min(max(int((y - beach.origin_m[1]) / beach.cell_m), 0), rows - 1)
-        return r, c
+    def cell(x: float, y: float) -> tuple[int, int]:  # as the physics finds the terrain under a point
+        flat = int(env.world.setup.physics._cells(np.array([x]), np.array([y]))[0])
+        return flat // cols, flat % cols
 
     first = _column(env, "speed_0_0")
     elev = _column(env, "elevation_0_0_m")
