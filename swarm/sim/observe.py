@@ -92,36 +92,49 @@ class Observer:
         return out.reshape(r, n, lay.size)
 
     # neighbours ---------------------------------------------------------------------------------------
-    def _refresh(self, run, b: int, on: np.ndarray) -> None:
-        """Run b's neighbour table, (n, k) ids of each robot's k nearest robots on the map, as of
-        the last radio update or arrival on the map (the table its radio keeps), and which of those
-        links work: fixed until the next radio update, which refreshes the table. A robot lost
-        since shows as absent (`_fill`) until then, as a radio's table loses a silent neighbour."""
+    def _refresh_many(self, run, b: int, on: np.ndarray) -> None:
+        """Run b's neighbour table from a k-d tree (`_refresh_stale`; runs with many robots on the
+        map) and which of its links work."""
         live = np.flatnonzero(on)
         k = self.layout.neighbours
         table = np.full((self.n, k), -1, dtype=np.intp)
         q = min(k + 1, len(live))
-        xy = run.robot_state[:, :2]
-        if len(live) <= BRUTE_NEAREST_ROBOTS:
-            _nearest(xy, live, k, table)
-        elif q >= 2:
-            _, idx = cKDTree(xy[live], balanced_tree=False, compact_nodes=False).query(xy[live], k=q)
+        if q >= 2:
+            xy = run.robot_state[live, :2]
+            _, idx = cKDTree(xy, balanced_tree=False, compact_nodes=False).query(xy, k=q)
             table[live, : q - 1] = live[idx[:, 1:]]  # the first is itself
         self._tables[b] = table
         _linked_slots(run.links.indptr, run.links.indices, table, self._linked[b])
 
     def _refresh_stale(self, world, runs: list[int], here: np.ndarray) -> None:
         """Refresh the neighbour tables of the runs whose radio updated or where a robot arrived on
-        the map since their table was made. `here` (len(runs), n): on the map now."""
+        the map since their table was made. `here` (len(runs), n): on the map now.
+
+        A run's table: (n, k) ids of each robot's k nearest robots on the map, as of the last
+        radio update or arrival on the map (the table its radio keeps), and which of those links
+        work; fixed until the next radio update. A robot lost since shows as absent (`_fill`)
+        until then, as a radio's table loses a silent neighbour."""
         if self.layout.neighbours == 0:
             return
         versions = world.links_version[runs]
         arrived = (here & ~self._table_on[runs]).any(axis=1)
-        stale = (versions != self._table_version[runs]) | arrived
-        for j in np.flatnonzero(stale).tolist():
-            b = runs[j]
-            self._refresh(world.runs[b], b, here[j])
-            self._table_version[b], self._table_on[b] = versions[j], here[j]
+        stale = np.flatnonzero((versions != self._table_version[runs]) | arrived)
+        if not len(stale):
+            return
+        few = np.count_nonzero(here[stale], axis=1) <= BRUTE_NEAREST_ROBOTS
+        for j in stale[~few].tolist():
+            self._refresh_many(world.runs[runs[j]], runs[j], here[j])
+        if few.any():  # every pair, all these runs in one pass
+            js = stale[few]
+            picked = np.asarray(runs, dtype=np.intp)[js]
+            links = [world.runs[b].links for b in picked.tolist()]
+            indptr = np.stack([x.indptr for x in links])
+            starts = np.concatenate(([0], np.cumsum(indptr[:, -1], dtype=np.int64)))
+            indices = np.concatenate([x.indices for x in links])
+            tables, linked = self._tables, self._linked
+            _refresh_few(world.robot_state, picked, here[js], indptr, indices, starts, tables, linked)
+        picked = np.asarray(runs, dtype=np.intp)[stale]
+        self._table_version[picked], self._table_on[picked] = versions[stale], here[stale]
 
     def _observe_objects(self, world, runs: list[int], block: np.ndarray) -> None:
         """Body-frame offset to the nearest object found and not yet marked: every pair looked at
@@ -266,6 +279,18 @@ def _nearest(xy, live, k, table):
             best_j[at] = j
         for slot in range(count):
             table[i, slot] = best_j[slot]
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _refresh_few(state, runs, here, indptr, indices, starts, tables, linked):
+    """The neighbour tables of runs `runs` (few robots each: every pair looked at), `here[r]` run
+    r's robots on the map, its links' CSR `indptr[r]` and `indices[starts[r]:starts[r + 1]]`."""
+    k = tables.shape[2]
+    for r in range(runs.shape[0]):
+        b = runs[r]
+        tables[b] = -1
+        _nearest(state[b], np.flatnonzero(here[r]), k, tables[b])
+        _linked_slots(indptr[r], indices[starts[r] : starts[r + 1]], tables[b], linked[b])
 
 
 @numba.njit(cache=True, error_model="numpy")
