@@ -229,7 +229,8 @@ def clear_of(points: np.ndarray, avoid: np.ndarray, radius_m: float) -> tuple[np
 
 @numba.njit(cache=True, error_model="numpy")
 def _advance(points, start, end, cursor, xy, mask):
-    """`Routes.advance`, robot by robot."""
+    """`Routes.advance`, robot by robot. The clear cases are settled without a square root
+    (`_within`, `_may_pass`): each decision is the one `math.hypot` and `_leg` give."""
     for i in range(cursor.shape[0]):
         if not mask[i]:
             continue
@@ -238,15 +239,41 @@ def _advance(points, start, end, cursor, xy, mask):
             cur = cursor[i]
             if cur >= end[i]:
                 break
-            wx, wy = points[cur, 0], points[cur, 1]
             final = cur == end[i] - 1
-            hit = math.hypot(wx - x, wy - y) < (FINAL_CAPTURE_M if final else CAPTURE_M)
-            if not hit and not final:
+            hit = _within(points[cur, 0] - x, points[cur, 1] - y, FINAL_CAPTURE_M if final else CAPTURE_M)
+            if not hit and not final and _may_pass(points, start[i], cur, x, y):
                 _, _, _, _, length, along, cross = _leg(points, start[i], cur, x, y)
                 hit = length > 0 and along >= length and abs(cross) <= PASS_CROSS_TRACK_M
             if not hit:
                 break
             cursor[i] += 1
+
+
+#: Relative margin far above the rounding of the squared forms in `_within` and `_may_pass`.
+_MARGIN = 1e-9
+
+
+@numba.njit(cache=True, error_model="numpy", inline="always")
+def _within(dx, dy, radius):
+    """`math.hypot(dx, dy) < radius`, from the squared distance unless it is within rounding of
+    the radius."""
+    d2, r2 = dx * dx + dy * dy, radius * radius
+    if d2 < r2 * (1.0 - _MARGIN):
+        return True
+    if d2 > r2 * (1.0 + _MARGIN):
+        return False
+    return math.hypot(dx, dy) < radius
+
+
+@numba.njit(cache=True, error_model="numpy", inline="always")
+def _may_pass(points, start, cur, x, y):
+    """False where a robot is surely short of its leg's end (`_leg`'s along < length): the leg
+    l and the robot r from the leg's start give r . l < |l|^2 by more than rounding."""
+    prev = cur - 1 if cur > start else cur
+    lx, ly = points[cur, 0] - points[prev, 0], points[cur, 1] - points[prev, 1]
+    rx, ry = x - points[prev, 0], y - points[prev, 1]
+    ll = lx * lx + ly * ly
+    return rx * lx + ry * ly >= ll - _MARGIN * (abs(rx * lx) + abs(ry * ly) + ll)
 
 
 @numba.njit(cache=True, error_model="numpy", inline="always")

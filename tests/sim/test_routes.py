@@ -94,6 +94,37 @@ def test_advance_passes_the_waypoints_the_every_robot_rule_passes() -> None:
             xy = xy + rng.normal(0.0, 1.0, size=(n, 2))
 
 
+def test_advance_decides_as_the_square_roots_on_the_boundaries() -> None:
+    """Robots on the capture circles and on the line through a leg's end, a rounding either side:
+    the shortcut on squared distances decides as `hypot` and the leg's frame do."""
+    rng = np.random.default_rng(8)
+    n = 400
+    a, b = Routes(n), Routes(n)
+    xy = np.empty((n, 2))
+    for i in range(n):
+        pts = np.cumsum(rng.uniform(0.5, 3.0, size=(3, 2)), axis=0)
+        a.set(i, pts)
+        b.set(i, pts)
+        a.cursor[i] = b.cursor[i] = a.start[i] + int(rng.integers(1, 3))
+        cur = pts[a.cursor[i] - a.start[i]]
+        final = a.cursor[i] == a.end[i] - 1
+        if i % 2:  # on its waypoint's capture circle
+            radius = FINAL_CAPTURE_M if final else CAPTURE_M
+            angle = rng.uniform(0.0, 2.0 * np.pi)
+            xy[i] = cur + radius * np.array([np.cos(angle), np.sin(angle)])
+        else:  # level with the end of its leg, beside it
+            leg = cur - pts[a.cursor[i] - a.start[i] - 1]
+            normal = np.array([-leg[1], leg[0]]) / np.hypot(*leg)
+            xy[i] = cur + rng.uniform(-1.5, 1.5) * PASS_CROSS_TRACK_M * normal
+        xy[i] = np.nextafter(xy[i], xy[i] + rng.choice([-1.0, 0.0, 1.0], size=2))
+    mask = np.ones(n, bool)
+    before = a.cursor.copy()
+    _advance_every_robot(a, xy, mask)
+    b.advance(xy, mask)
+    assert np.array_equal(a.cursor, b.cursor)
+    assert 0 < np.count_nonzero(a.cursor > before) < n  # some passed, some did not
+
+
 def test_may_pass_holds_every_robot_steer_clear_would_re_lay() -> None:
     rng = np.random.default_rng(5)
     for _ in range(30):
