@@ -68,7 +68,7 @@ from scipy.spatial import cKDTree
 
 from swarm.errors import SwarmError
 from swarm.planning.radio import RadioParams, comm_range_m, received_power_dbm
-from swarm.sim import pair_kernels
+from swarm.sim import draws, pair_kernels
 
 #: Candidate pairs: the link could close with shadowing this many standard deviations favourable.
 CANDIDATE_SIGMAS = 4.0
@@ -506,10 +506,11 @@ def _shadowing(
     rho[~old] = 0.0
     fresh = rho < 1.0
     z = np.zeros(len(old))
-    counts = np.bincount(run[fresh], minlength=len(rngs)).tolist()
-    draws = [rng.standard_normal(c) for rng, c in zip(rngs, counts, strict=True) if c]
-    if draws:
-        z[fresh] = draws[0] if len(draws) == 1 else np.concatenate(draws)
+    counts = np.bincount(run[fresh], minlength=len(rngs))
+    if counts.any():  # each run's draws in its pairs' order, run after run (`run` is sorted)
+        fresh_z = np.empty(int(counts.sum()))
+        draws.fill_normal(rngs, np.arange(len(rngs)), np.concatenate(([0], np.cumsum(counts))), fresh_z)
+        z[fresh] = fresh_z
     return rho * prev + np.sqrt(1.0 - rho * rho) * (net.sigma_db * z)
 
 

@@ -1,4 +1,4 @@
-"""Uniform draws of many runs, each from its own generator, in one compiled loop.
+"""Uniform and normal draws of many runs, each from its own generator, in one compiled loop.
 
 Every run of a batch keeps its own random streams (`swarm.sim.world`), so a step of 1000 runs
 used to make 1000 small `Generator.random` calls from Python per stream. numba draws from a numpy
@@ -31,9 +31,30 @@ def fill_uniform(
             gens[b].random(out=out[lo:hi])
 
 
+def fill_normal(
+    gens: Sequence[np.random.Generator], runs: np.ndarray, starts: np.ndarray, out: np.ndarray
+) -> None:
+    """`fill_uniform` of standard normals: the draws of `gens[runs[k]].standard_normal(...)`."""
+    if isinstance(gens, List):
+        _fill_normal(gens, runs, starts, out)
+        return
+    for k, b in enumerate(runs.tolist()):
+        lo, hi = int(starts[k]), int(starts[k + 1])
+        if hi > lo:
+            gens[b].standard_normal(out=out[lo:hi])
+
+
 @numba.njit(cache=True)
 def _fill_uniform(gens, runs, starts, out):
     for k in range(runs.shape[0]):
         g = gens[runs[k]]
         for i in range(starts[k], starts[k + 1]):
             out[i] = g.random()
+
+
+@numba.njit(cache=True)
+def _fill_normal(gens, runs, starts, out):
+    for k in range(runs.shape[0]):
+        g = gens[runs[k]]
+        for i in range(starts[k], starts[k + 1]):
+            out[i] = g.standard_normal()

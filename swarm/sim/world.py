@@ -599,14 +599,15 @@ class World:
         runs = [self.runs[b] for b in due]
         nets = [run.radio_net for run in runs]
         xy = self.robot_state[due, :, :2]
-        radio = self.stream("radio")
-        links = comms.update_nets(nets, xy, up, [radio[b] for b in due])
+        every = len(due) == self.B  # then `due` is every run, in order
+        radio = self.stream_typed("radio") if every else [self.stream("radio")[b] for b in due]
+        links = comms.update_nets(nets, xy, up, radio)
         self.link_degree[due] = [x.degree for x in links]
         self.source_hops[due] = [x.source_hops for x in links]
-        for b, run, run_links in zip(due, runs, links, strict=True):
-            self.next_comms_s[b] = float(self.t_s[b]) + self.comms_period_s
+        self.next_comms_s[due] = t + self.comms_period_s
+        self.links_version[due] += 1
+        for run, run_links in zip(runs, links, strict=True):
             run.links = run_links
-            self.links_version[b] += 1
             if s.relay_task is not None:
                 now = bool(run.links.fixed_linked(s.relay_task.redundancy))
                 if now != bool(run.relay_up):

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 from numba.typed import List
 
-from swarm.sim.draws import fill_uniform
+from swarm.sim.draws import fill_normal, fill_uniform
 
 
 def _generators(seed: int, k: int) -> list[np.random.Generator]:
@@ -33,3 +33,18 @@ def test_a_plain_list_gives_the_same_draws() -> None:
     fill_uniform(List(_generators(3, 2)), runs, starts, typed)
     fill_uniform(_generators(3, 2), runs, starts, plain)
     assert np.array_equal(typed, plain)
+
+
+def test_normals_are_numpys_standard_normals_run_by_run() -> None:
+    runs, starts = np.array([2, 0, 1]), np.array([0, 0, 700, 1001])  # the ziggurat's tails too
+    typed, plain = np.empty(1001), np.empty(1001)
+    gens = _generators(5, 3)
+    fill_normal(List(gens), runs, starts, typed)
+    ref = _generators(5, 3)
+    fill_normal(ref, runs, starts, plain)
+    assert np.array_equal(typed, plain)
+    expected = np.concatenate(
+        [_generators(5, 3)[b].standard_normal(starts[k + 1] - starts[k]) for k, b in enumerate(runs)]
+    )
+    assert np.array_equal(typed, expected)
+    assert [g.random() for g in gens] == [g.random() for g in ref]
