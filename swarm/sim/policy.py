@@ -42,7 +42,6 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from scipy.sparse import csr_matrix
 from scipy.spatial import cKDTree
 
 from swarm.planning.allocation import auction
@@ -128,7 +127,11 @@ class ScriptedPolicy:
         self.env: RunView = env
         self.realloc_period_s = realloc_period_s
         self.clearance_lead_s = clearance_lead_s
-        self._graph: csr_matrix | None = None  # the cost map's free cells (`standoff`), built once
+        # fixed by the mission and the settings above: worked out once, not on every step
+        self._lead_s = self._clearance_lead_s()
+        #: how long before the detonation `_clearance` starts checking (`_drop_late_markers` from
+        #: `HOLD_HORIZON_S`, `_hold_due` from then or from the lead if that is longer)
+        self._watch_s = max(HOLD_HORIZON_S, self._lead_s + 1e-9)
         self.reset()
 
     def reset(self) -> None:
@@ -165,7 +168,7 @@ class ScriptedPolicy:
         """Coordinate: set the environment's commands and routes for this step directly (a runner
         then calls `env.advance({})`)."""
         env = self.env
-        if env.steps == 0 and self._seen > len(env.events):
+        if self._seen > len(env.events) and env.steps == 0:
             self.reset()
         self._read_events()
         self._spread()
@@ -179,6 +182,8 @@ class ScriptedPolicy:
     # events -> work items ----------------------------------------------------------------------------
     def _read_events(self) -> None:
         env = self.env
+        if self._seen == len(env.events):
+            return
         new = env.events[self._seen :]
         self._seen = len(env.events)
         for ev in new:
@@ -507,8 +512,10 @@ class ScriptedPolicy:
         if not env.mission.phases.return_to_sea.enabled:
             return
         b = env.mission.hazards.battery
-        low = env.alive & env.on_map & (env.energy_wh <= b.reserve_fraction * b.capacity_wh)
-        low &= (env.command != RETURN) & (env.marking < 0)
+        low = env.energy_wh <= b.reserve_fraction * b.capacity_wh
+        if not low.any():
+            return  # the usual step: nobody is low, whatever else holds
+        low &= env.alive & env.on_map & (env.command != RETURN) & (env.marking < 0)
         for i in np.flatnonzero(low):
             self._release_work(int(i), self._hearers(int(i)))
             env.set_command(int(i), RETURN)
@@ -516,6 +523,10 @@ class ScriptedPolicy:
 
     def lead_s(self) -> float:
         """How long before the detonation robots start clearing the standoff."""
+        return self._lead_s
+
+    def _clearance_lead_s(self) -> float:
+        """`lead_s`: `clearance_lead_s`, or longer when the standoff is far to drive."""
         c = self.env.clearance
         if c is None:
             return self.clearance_lead_s
@@ -528,13 +539,15 @@ class ScriptedPolicy:
         if c is None or self._clearance_state == "done":
             return
         left = c.at_s - env.t_s
+        if self._clearance_state == "before" and left > self._watch_s:
+            return  # too early for either check below
         if self._clearance_state == "before" and left <= HOLD_HORIZON_S:
             self._drop_late_markers(left)  # the allocation parks them clear
         if self._clearance_state == "before" and self._hold_due():
             self._clearance_state = "holding"
-            self._hold(c.at_s - env.t_s, c.standoff_m + STANDOFF_MARGIN_M)
+            self._hold(left, c.standoff_m + STANDOFF_MARGIN_M)
         elif self._clearance_state == "holding" and not env.cleared:
-            self._recheck_markers(c.at_s - env.t_s, c.standoff_m + STANDOFF_MARGIN_M)
+            self._recheck_markers(left, c.standoff_m + STANDOFF_MARGIN_M)
         elif self._clearance_state == "holding" and env.cleared:
             self._clearance_state = "done"
             for i, (rest, in_track) in self._held.items():
@@ -671,9 +684,8 @@ class ScriptedPolicy:
         and hold against the same finds many times)."""
         ground = self._safe_cached(objs, safe_m)
         if ground is None:
-            if self._graph is None:
-                self._graph = free_cell_graph(self.env.plan.costmap)
-            ground = SafeGround(self.env.plan.costmap, self._graph, objs, safe_m, dry=self.env.dry_ground)
+            cm = self.env.plan.costmap
+            ground = SafeGround(cm, free_cell_graph(cm), objs, safe_m, dry=self.env.dry_ground)
             self._safe_cache = ((objs.tobytes(), safe_m), ground)
         return ground
 
