@@ -144,9 +144,10 @@ class ScriptedPolicy:
         self._gave_up: set[tuple[int, int]] = set()  # (robot, object): marks given up as too far
         self._returning = False
         self._links_seen = -1
-        # what the last spread saw (radio components, who was alive), and whether an item has been
-        # opened or given a new audience since: with neither changed, a spread changes nothing
-        self._spread_seen: tuple[np.ndarray, np.ndarray] | None = None
+        # what the last spread saw (the bytes of the radio components and of who was alive), and
+        # whether an item has been opened or given a new audience since: with neither changed, a
+        # spread changes nothing
+        self._spread_seen: tuple[bytes, bytes] | None = None
         self._news = False
         self._safe_cache: tuple[tuple[bytes, float], SafeGround] | None = None
         self._found_cache: tuple[tuple[int, int, int], np.ndarray, cKDTree | None] | None = None
@@ -273,11 +274,10 @@ class ScriptedPolicy:
         self._links_seen = env.links_version
         comp = env.links.component[: env.n]
         alive = env.alive
-        if not self._news and self._spread_seen is not None:
-            seen_comp, seen_alive = self._spread_seen
-            if np.array_equal(comp, seen_comp) and np.array_equal(alive, seen_alive):
-                return  # a spread is idempotent: the same components and robots reach no one new
-        self._spread_seen = (comp.copy(), alive.copy())
+        seen = (comp.tobytes(), alive.tobytes())
+        if not self._news and seen == self._spread_seen:
+            return  # a spread is idempotent: the same components and robots reach no one new
+        self._spread_seen = seen
         self._news = False
         open_items = [it for it in self.items if it.taken_by < 0 and it.audience.any()]
         if not open_items:
