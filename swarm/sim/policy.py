@@ -313,20 +313,26 @@ class ScriptedPolicy:
         they are due (`_marks_due`): a robot loitering on a mine early can neither finish a lost
         searcher's track nor dodge the hazards while it waits. In the last `STAND_BY_LEAD_S` of
         beach operations the stand-bys at end-held beacons (`_stand_by`) come before the tracks
-        too, and stay out of their auctions."""
+        too, and stay out of their auctions.
+
+        Who is idle is worked out again after each step that may send robots off (a stand-by, an
+        auction, parking), and only then."""
         env = self.env
-        if not self._idle().any():
+        idle = self._idle()
+        if not idle.any():
             return  # every step below waits for an idle robot, and none becomes idle meanwhile
         late = self._stand_by_first()
         if late:
-            self._stand_by(self._idle())
+            self._stand_by(idle)
+            idle = self._idle()
         open_items = [it for it in self.items if it.taken_by < 0]  # no item is opened meanwhile
         routes = [it for it in open_items if it.kind == "route"]
         stations = [it for it in routes if not it.track]
-        if stations and self._idle().any():
-            self._auction(stations, self._idle())
-        kept = self._standing_by() if late else np.zeros(env.n, bool)
-        idle = self._idle() & ~kept
+        if stations and idle.any():
+            self._auction(stations, idle)
+            idle = self._idle()
+        kept = self._standing_by(idle) if late else np.zeros(env.n, bool)
+        idle = idle & ~kept
         tracks = [it for it in routes if it.track and it.taken_by < 0]
         if tracks and idle.any():
             self._auction(tracks, idle)
@@ -362,14 +368,14 @@ class ScriptedPolicy:
             for point in st.points_m
         ]
 
-    def _standing_by(self) -> np.ndarray:
-        """Idle robots whose route ends at a point that must be held at the end."""
+    def _standing_by(self, idle: np.ndarray) -> np.ndarray:
+        """The robots of `idle` whose route ends at a point that must be held at the end."""
         env = self.env
         goals = self._station_goals()
         out = np.zeros(env.n, bool)
         for point, _ in self._end_held_points():
             out |= np.hypot(*(goals - point).T) <= STATION_RADIUS_M
-        return out & self._idle()
+        return out & idle
 
     def _stand_by(self, idle: np.ndarray) -> None:
         """Once no clearance is pending, a point that must be held at the end of beach operations
@@ -690,9 +696,11 @@ class ScriptedPolicy:
         return ground
 
     def _return(self) -> None:
+        if self._returning:
+            return
         env = self.env
-        rts = env.mission.phases.return_to_sea
-        if self._returning or not rts.enabled or env.t_s + 1e-9 < env.mission.phases.beach_end_s:
+        phases = env.mission.phases
+        if not phases.return_to_sea.enabled or env.t_s + 1e-9 < phases.beach_end_s:
             return
         self._returning = True
         for i in np.flatnonzero(env.alive & env.on_map & (env.marking < 0)):
