@@ -129,8 +129,8 @@ class ScriptedPolicy:
         self.clearance_lead_s = clearance_lead_s
         # fixed by the mission and the settings above: worked out once, not on every step
         self._lead_s = self._clearance_lead_s()
-        #: how long before the detonation `_clearance` starts checking (`_drop_late_markers` from
-        #: `HOLD_HORIZON_S`, `_hold_due` from then or from the lead if that is longer)
+        # how long before the detonation `_clearance` starts checking (`_drop_late_markers` from
+        # `HOLD_HORIZON_S`, `_hold_due` from then or from the lead if that is longer)
         self._watch_s = max(HOLD_HORIZON_S, self._lead_s + 1e-9)
         self.reset()
 
