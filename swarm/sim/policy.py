@@ -42,7 +42,6 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from scipy.sparse import csr_matrix
 from scipy.spatial import cKDTree
 
 from swarm.planning.allocation import auction
@@ -128,7 +127,11 @@ class ScriptedPolicy:
         self.env: RunView = env
         self.realloc_period_s = realloc_period_s
         self.clearance_lead_s = clearance_lead_s
-        self._graph: csr_matrix | None = None  # the cost map's free cells (`standoff`), built once
+        # fixed by the mission and the settings above: worked out once, not on every step
+        self._lead_s = self._clearance_lead_s()
+        # how long before the detonation `_clearance` starts checking (`_drop_late_markers` from
+        # `HOLD_HORIZON_S`, `_hold_due` from then or from the lead if that is longer)
+        self._watch_s = max(HOLD_HORIZON_S, self._lead_s + 1e-9)
         self.reset()
 
     def reset(self) -> None:
@@ -141,9 +144,10 @@ class ScriptedPolicy:
         self._gave_up: set[tuple[int, int]] = set()  # (robot, object): marks given up as too far
         self._returning = False
         self._links_seen = -1
-        # what the last spread saw (radio components, who was alive), and whether an item has been
-        # opened or given a new audience since: with neither changed, a spread changes nothing
-        self._spread_seen: tuple[np.ndarray, np.ndarray] | None = None
+        # what the last spread saw (the bytes of the radio components and of who was alive), and
+        # whether an item has been opened or given a new audience since: with neither changed, a
+        # spread changes nothing
+        self._spread_seen: tuple[bytes, bytes] | None = None
         self._news = False
         self._safe_cache: tuple[tuple[bytes, float], SafeGround] | None = None
         self._found_cache: tuple[tuple[int, int, int], np.ndarray, cKDTree | None] | None = None
@@ -165,7 +169,7 @@ class ScriptedPolicy:
         """Coordinate: set the environment's commands and routes for this step directly (a runner
         then calls `env.advance({})`)."""
         env = self.env
-        if env.steps == 0 and self._seen > len(env.events):
+        if self._seen > len(env.events) and env.steps == 0:
             self.reset()
         self._read_events()
         self._spread()
@@ -179,6 +183,8 @@ class ScriptedPolicy:
     # events -> work items ----------------------------------------------------------------------------
     def _read_events(self) -> None:
         env = self.env
+        if self._seen == len(env.events):
+            return
         new = env.events[self._seen :]
         self._seen = len(env.events)
         for ev in new:
@@ -268,11 +274,10 @@ class ScriptedPolicy:
         self._links_seen = env.links_version
         comp = env.links.component[: env.n]
         alive = env.alive
-        if not self._news and self._spread_seen is not None:
-            seen_comp, seen_alive = self._spread_seen
-            if np.array_equal(comp, seen_comp) and np.array_equal(alive, seen_alive):
-                return  # a spread is idempotent: the same components and robots reach no one new
-        self._spread_seen = (comp.copy(), alive.copy())
+        seen = (comp.tobytes(), alive.tobytes())
+        if not self._news and seen == self._spread_seen:
+            return  # a spread is idempotent: the same components and robots reach no one new
+        self._spread_seen = seen
         self._news = False
         open_items = [it for it in self.items if it.taken_by < 0 and it.audience.any()]
         if not open_items:
@@ -308,20 +313,26 @@ class ScriptedPolicy:
         they are due (`_marks_due`): a robot loitering on a mine early can neither finish a lost
         searcher's track nor dodge the hazards while it waits. In the last `STAND_BY_LEAD_S` of
         beach operations the stand-bys at end-held beacons (`_stand_by`) come before the tracks
-        too, and stay out of their auctions."""
+        too, and stay out of their auctions.
+
+        Who is idle is worked out again after each step that may send robots off (a stand-by, an
+        auction, parking), and only then."""
         env = self.env
-        if not self._idle().any():
+        idle = self._idle()
+        if not idle.any():
             return  # every step below waits for an idle robot, and none becomes idle meanwhile
         late = self._stand_by_first()
         if late:
-            self._stand_by(self._idle())
+            self._stand_by(idle)
+            idle = self._idle()
         open_items = [it for it in self.items if it.taken_by < 0]  # no item is opened meanwhile
         routes = [it for it in open_items if it.kind == "route"]
         stations = [it for it in routes if not it.track]
-        if stations and self._idle().any():
-            self._auction(stations, self._idle())
-        kept = self._standing_by() if late else np.zeros(env.n, bool)
-        idle = self._idle() & ~kept
+        if stations and idle.any():
+            self._auction(stations, idle)
+            idle = self._idle()
+        kept = self._standing_by(idle) if late else np.zeros(env.n, bool)
+        idle = idle & ~kept
         tracks = [it for it in routes if it.track and it.taken_by < 0]
         if tracks and idle.any():
             self._auction(tracks, idle)
@@ -357,14 +368,14 @@ class ScriptedPolicy:
             for point in st.points_m
         ]
 
-    def _standing_by(self) -> np.ndarray:
-        """Idle robots whose route ends at a point that must be held at the end."""
+    def _standing_by(self, idle: np.ndarray) -> np.ndarray:
+        """The robots of `idle` whose route ends at a point that must be held at the end."""
         env = self.env
         goals = self._station_goals()
         out = np.zeros(env.n, bool)
         for point, _ in self._end_held_points():
             out |= np.hypot(*(goals - point).T) <= STATION_RADIUS_M
-        return out & self._idle()
+        return out & idle
 
     def _stand_by(self, idle: np.ndarray) -> None:
         """Once no clearance is pending, a point that must be held at the end of beach operations
@@ -507,8 +518,10 @@ class ScriptedPolicy:
         if not env.mission.phases.return_to_sea.enabled:
             return
         b = env.mission.hazards.battery
-        low = env.alive & env.on_map & (env.energy_wh <= b.reserve_fraction * b.capacity_wh)
-        low &= (env.command != RETURN) & (env.marking < 0)
+        low = env.energy_wh <= b.reserve_fraction * b.capacity_wh
+        if not low.any():
+            return  # the usual step: nobody is low, whatever else holds
+        low &= env.alive & env.on_map & (env.command != RETURN) & (env.marking < 0)
         for i in np.flatnonzero(low):
             self._release_work(int(i), self._hearers(int(i)))
             env.set_command(int(i), RETURN)
@@ -516,6 +529,10 @@ class ScriptedPolicy:
 
     def lead_s(self) -> float:
         """How long before the detonation robots start clearing the standoff."""
+        return self._lead_s
+
+    def _clearance_lead_s(self) -> float:
+        """`lead_s`: `clearance_lead_s`, or longer when the standoff is far to drive."""
         c = self.env.clearance
         if c is None:
             return self.clearance_lead_s
@@ -528,13 +545,15 @@ class ScriptedPolicy:
         if c is None or self._clearance_state == "done":
             return
         left = c.at_s - env.t_s
+        if self._clearance_state == "before" and left > self._watch_s:
+            return  # too early for either check below
         if self._clearance_state == "before" and left <= HOLD_HORIZON_S:
             self._drop_late_markers(left)  # the allocation parks them clear
         if self._clearance_state == "before" and self._hold_due():
             self._clearance_state = "holding"
-            self._hold(c.at_s - env.t_s, c.standoff_m + STANDOFF_MARGIN_M)
+            self._hold(left, c.standoff_m + STANDOFF_MARGIN_M)
         elif self._clearance_state == "holding" and not env.cleared:
-            self._recheck_markers(c.at_s - env.t_s, c.standoff_m + STANDOFF_MARGIN_M)
+            self._recheck_markers(left, c.standoff_m + STANDOFF_MARGIN_M)
         elif self._clearance_state == "holding" and env.cleared:
             self._clearance_state = "done"
             for i, (rest, in_track) in self._held.items():
@@ -671,16 +690,17 @@ class ScriptedPolicy:
         and hold against the same finds many times)."""
         ground = self._safe_cached(objs, safe_m)
         if ground is None:
-            if self._graph is None:
-                self._graph = free_cell_graph(self.env.plan.costmap)
-            ground = SafeGround(self.env.plan.costmap, self._graph, objs, safe_m, dry=self.env.dry_ground)
+            cm = self.env.plan.costmap
+            ground = SafeGround(cm, free_cell_graph(cm), objs, safe_m, dry=self.env.dry_ground)
             self._safe_cache = ((objs.tobytes(), safe_m), ground)
         return ground
 
     def _return(self) -> None:
+        if self._returning:
+            return
         env = self.env
-        rts = env.mission.phases.return_to_sea
-        if self._returning or not rts.enabled or env.t_s + 1e-9 < env.mission.phases.beach_end_s:
+        phases = env.mission.phases
+        if not phases.return_to_sea.enabled or env.t_s + 1e-9 < phases.beach_end_s:
             return
         self._returning = True
         for i in np.flatnonzero(env.alive & env.on_map & (env.marking < 0)):

@@ -9,6 +9,7 @@ cell over the cost map's free cells, 8-connected, answers for every robot at onc
 
 from __future__ import annotations
 
+import weakref
 from functools import cached_property
 
 import numpy as np
@@ -21,9 +22,21 @@ from swarm.planning.costmap import CostMap
 _STEPS = ((0, 1), (1, 0), (1, 1), (1, -1))
 
 
+#: `free_cell_graph` of each cost map in use (a batch's runs and their policies share one map).
+_GRAPHS: weakref.WeakKeyDictionary[CostMap, csr_matrix] = weakref.WeakKeyDictionary()
+
+
 def free_cell_graph(cm: CostMap) -> csr_matrix:
     """The cost map's free cells as an undirected graph: node row * cols + col, edges to the 8
-    neighbours that are free too, weighted by the distance between centres (m)."""
+    neighbours that are free too, weighted by the distance between centres (m). Built once per
+    cost map and shared: treat it as read-only."""
+    graph = _GRAPHS.get(cm)
+    if graph is None:
+        graph = _GRAPHS[cm] = _build_free_cell_graph(cm)
+    return graph
+
+
+def _build_free_cell_graph(cm: CostMap) -> csr_matrix:
     rows, cols = cm.shape
     free = ~cm.blocked
     heads, tails, weights = [], [], []
@@ -47,7 +60,9 @@ def near_any(cm: CostMap, objs: np.ndarray, radius_m: float) -> np.ndarray:
     """(rows, cols) bool: cells whose centre lies closer than `radius_m` to a point of `objs`. Each
     point looks only at the window of cells around it, with the distance a k-d tree computes
     (the root of the summed squared differences), so the mask is the one a query of every cell
-    against a `cKDTree` of `objs` gives (`distance < radius_m`), at a fraction of its cost."""
+    against a `cKDTree` of `objs` gives (`distance < radius_m`), at a fraction of its cost. The
+    window's centres are a column of y by a row of x, broadcast: the same sums, without a grid of
+    indices to build and scatter through."""
     out = np.zeros(cm.shape, bool)
     nrows, ncols = cm.shape
     for ox, oy in objs.tolist():
@@ -57,10 +72,9 @@ def near_any(cm: CostMap, objs: np.ndarray, radius_m: float) -> np.ndarray:
         r1, c1 = min(r1 + 1, nrows - 1), min(c1 + 1, ncols - 1)
         if r1 < r0 or c1 < c0:
             continue
-        rr, cc = np.mgrid[r0 : r1 + 1, c0 : c1 + 1]
-        x, y = cm.center_of(rr, cc)
+        x, y = cm.center_of(np.arange(r0, r1 + 1)[:, None], np.arange(c0, c1 + 1)[None, :])
         dx, dy = x - ox, y - oy
-        out[rr, cc] |= np.sqrt(dx * dx + dy * dy) < radius_m
+        out[r0 : r1 + 1, c0 : c1 + 1] |= np.sqrt(dx * dx + dy * dy) < radius_m
     return out
 
 
@@ -78,11 +92,12 @@ class SafeGround:
         dry: np.ndarray | None = None,
     ) -> None:
         self.cm = cm
-        rows, cols = np.nonzero(~cm.blocked)
-        safe = ~near_any(cm, np.asarray(objs, dtype=np.float64).reshape(-1, 2), safe_m)[rows, cols]
-        if dry is not None and (safe & dry[rows, cols]).any():
-            safe &= dry[rows, cols]
-        sources = (rows * cm.shape[1] + cols)[safe]
+        # masks over the whole grid (cheaper than indexing the free cells out first); the sources
+        # come out in node order, as the free cells' own order would give them
+        safe = ~cm.blocked & ~near_any(cm, np.asarray(objs, dtype=np.float64).reshape(-1, 2), safe_m)
+        if dry is not None and (safe & dry).any():
+            safe &= dry
+        sources = np.flatnonzero(safe)
         if not len(sources):
             self.dist = np.full(cm.shape[0] * cm.shape[1], np.inf)
             self.pred = np.full(len(self.dist), -9999)

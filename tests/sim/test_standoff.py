@@ -1,6 +1,7 @@
 """Getting clear of a blast over drivable ground: the path ends clear of every mine, runs over
 free cells only, is as long as the distance says, and is never shorter than the straight line;
-the router's batched `reachable_many` agrees with `reachable` point by point."""
+the cells near the mines are those a k-d tree finds; the router's batched `reachable_many`
+agrees with `reachable` point by point."""
 
 from __future__ import annotations
 
@@ -13,7 +14,7 @@ from scipy.spatial import cKDTree
 from swarm.mission.load import load_mission
 from swarm.planning import build_costmap
 from swarm.sim.router import Router
-from swarm.sim.standoff import SafeGround, free_cell_graph
+from swarm.sim.standoff import SafeGround, free_cell_graph, near_any
 
 MINE_CLEAR = Path(__file__).resolve().parents[2] / "missions" / "mine_clear.yaml"
 
@@ -64,6 +65,24 @@ def test_reach_bounds_every_distance_to_safe_ground(costmap) -> None:
     assert (d[np.isfinite(d)] <= ground.reach_m).all()
     nowhere = SafeGround(cm, free_cell_graph(cm), mines, 1e6)  # no cell is clear: none finite
     assert nowhere.reach_m == -np.inf
+
+
+def test_near_any_is_a_kd_tree_query_of_every_cell(costmap) -> None:
+    """The windowed mask is exactly `distance < radius` from a k-d tree of the points, at every
+    cell, with points near and beyond the map's edges and radii from under a cell to most of it."""
+    cm = costmap
+    rows, cols = np.indices(cm.shape)
+    centres = np.column_stack([c.ravel() for c in cm.center_of(rows, cols)])
+    x0, y0, x1, y1 = cm.bounds_m
+    rng = np.random.default_rng(3)
+    for radius_m in (0.3, 17.3, 70.0, 400.0):
+        objs = np.column_stack([rng.uniform(x0 - 50, x1 + 50, 6), rng.uniform(y0 - 50, y1 + 50, 6)])
+        want = (cKDTree(objs).query(centres)[0] < radius_m).reshape(cm.shape)
+        assert np.array_equal(near_any(cm, objs, radius_m), want)
+
+
+def test_the_free_cell_graph_is_built_once_per_cost_map(costmap) -> None:
+    assert free_cell_graph(costmap) is free_cell_graph(costmap)
 
 
 def test_reachable_many_is_reachable_of_each_point(costmap) -> None:
