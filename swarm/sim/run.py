@@ -222,7 +222,7 @@ def simulate_batch(
     completed: list[float | None] = [None] * len(runs)
     live = list(range(len(runs)))
     while live:
-        for b in live:
+        for b in world.off_map(live):  # the only runs `fast_forward` can skip ahead
             if world.fast_forward(b):
                 next_record[b] = max(next_record[b], runs[b].t_s)
         for b in live:
@@ -231,10 +231,10 @@ def simulate_batch(
         ended, time_up, _ = world.advance(wheels, jet)
         world.finish(ended, time_up)
         still = []
+        times, running = world.t_s.tolist(), world.in_agents.any(axis=1).tolist()
         for b in live:
-            run = runs[b]
-            t, going = run.t_s, run.running
-            if completed[b] is None and run.score.success():
+            t, going = times[b], running[b]
+            if completed[b] is None and runs[b].score.success():
                 completed[b] = t
             if t + 1e-9 >= next_record[b] or not going:
                 recs[b].record()

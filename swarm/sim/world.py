@@ -401,6 +401,13 @@ class World:
             run.score.at_end = True
             run.log_event("mission_end", outcome=run.score.outcome())
 
+    def off_map(self, runs: list[int]) -> list[int]:
+        """The runs of `runs` still going with no robot on the map: the ones `fast_forward` may
+        skip ahead (it returns 0 for every other run)."""
+        runs_ = np.asarray(runs, dtype=np.intp)
+        ashore = (self.alive[runs_] & self.on_map[runs_]).any(axis=1)
+        return runs_[self.in_agents[runs_].any(axis=1) & ~ashore].tolist()
+
     def fast_forward(self, b: int) -> int:
         """Skip run b ahead while every robot is off the map (waiting on the platform or swimming in
         offshore), up to one step before the next release or arrival: one stride instead of many
