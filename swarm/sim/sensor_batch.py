@@ -63,7 +63,9 @@ class SensorBatch:
     def _refresh(self) -> None:
         """Each dirty run's screen keys (the bins around its target mines, `_maybe_near`'s) and its
         rows of the mine and target arrays `_looks` reads."""
-        width = max((s._m for s in self.sensors if s is not None), default=0)
+        dirty = [self.sensors[b] for b in np.flatnonzero(self._dirty).tolist()]
+        # every other run's field fits the rows already (it was refreshed before)
+        width = max((s._m for s in dirty if s is not None), default=0)
         if width > self._target.shape[1]:  # a larger field (a reset): every run's rows anew
             self._mine_xy = np.full((self.runs, width, 2), np.nan)
             self._target = np.zeros((self.runs, width), bool)
