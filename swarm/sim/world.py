@@ -576,11 +576,14 @@ class World:
             return
         k = self.marking[bs, who]
         obj_xy = np.empty((len(bs), 2))
+        unmarked = np.empty(len(bs), bool)  # as of the step's start: a superset of what gets marked
         cuts = np.flatnonzero(bs[1:] != bs[:-1]).tolist()
         for lo, hi in zip([0, *(c + 1 for c in cuts)], [*(c + 1 for c in cuts), len(bs)], strict=True):
-            obj_xy[lo:hi] = self.runs[int(bs[lo])].objects_m[k[lo:hi]]
+            run = self.runs[int(bs[lo])]
+            obj_xy[lo:hi] = run.objects_m[k[lo:hi]]
+            unmarked[lo:hi] = run.object_marker[k[lo:hi]] < 0
         d = self.robot_state[bs, who, :2] - obj_xy
-        near = np.flatnonzero(np.hypot(d[:, 0], d[:, 1]) <= MARK_RADIUS_M)
+        near = np.flatnonzero(unmarked & (np.hypot(d[:, 0], d[:, 1]) <= MARK_RADIUS_M))
         for b, i, obj in zip(bs[near].tolist(), who[near].tolist(), k[near].tolist(), strict=True):
             run = self.runs[b]
             if run.object_marker[obj] < 0:
