@@ -21,6 +21,7 @@ from swarm.planning.detection import (
     expected_detection,
     inverse_cube_look,
     inverse_cube_range_m,
+    segment_distance,
 )
 
 AREA = box(0.0, 0.0, 200.0, 60.0)
@@ -103,3 +104,26 @@ def test_only_drivable_ground_counts_and_clipping_keeps_a_margin(small_costmap) 
         s = np.array([c.interpolate(d).coords[0] for d in np.linspace(0, c.length, 20)])
         row, col = cm.cell_of(s[:, 0], s[:, 1])
         assert (cm.clearance_m[row, col] >= cm.inflation_m + 1.0).all()
+
+
+def test_the_inverse_cube_map_is_its_definition_in_numpy_float_for_float() -> None:
+    """The compiled sum (segments beyond reach skipped) gives the floats of the definition: every
+    segment's `inverse_cube_look` where `segment_distance` is within reach, summed over segments
+    block by block as numpy sums a (segments x points) array."""
+    rng = np.random.default_rng(5)
+    points = rng.uniform(0.0, 400.0, (5000, 2))  # 400 segments to a block: three blocks
+    a = rng.uniform(0.0, 150.0, (900, 2))
+    b = a + rng.normal(0.0, 4.0, (900, 2))
+    b[:3] = a[:3]  # segments of no length look at nothing
+    width = 3.0
+    reach = inverse_cube_range_m(width)
+    block = 2_000_000 // len(points)
+    exposure = np.zeros(len(points))
+    for s in range(0, len(a), block):
+        sa, sb = a[s : s + block, None, :], b[s : s + block, None, :]
+        d = segment_distance(sa, sb, points[None, :, :])
+        exposure += np.where(d <= reach, inverse_cube_look(sa, sb, points[None, :, :]), 0.0).sum(axis=0)
+    want = -np.expm1(-(width**2) / (8.0 * math.pi) * exposure)
+    got = detection_map(points, np.stack([a, b], axis=1), "inverse_cube", width)
+    assert np.array_equal(got, want)
+    assert 0.05 < np.mean(got > 0) < 0.95  # near and far points both
