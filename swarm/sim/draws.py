@@ -22,26 +22,25 @@ def fill_uniform(
 ) -> None:
     """`out[starts[k]:starts[k + 1]]` (a flat float64 array) from generator `gens[runs[k]]`, k in
     order: the draws of `gens[runs[k]].random(out=out[starts[k]:starts[k + 1]])`, run after run."""
-    if isinstance(gens, List):
-        _fill_uniform(gens, runs, starts, out)
-        return
-    for k, b in enumerate(runs.tolist()):
-        lo, hi = int(starts[k]), int(starts[k + 1])
-        if hi > lo:
-            gens[b].random(out=out[lo:hi])
+    _fill(gens, runs, starts, out, _fill_uniform, "random")
 
 
 def fill_normal(
     gens: Sequence[np.random.Generator], runs: np.ndarray, starts: np.ndarray, out: np.ndarray
 ) -> None:
     """`fill_uniform` of standard normals: the draws of `gens[runs[k]].standard_normal(...)`."""
+    _fill(gens, runs, starts, out, _fill_normal, "standard_normal")
+
+
+def _fill(gens, runs: np.ndarray, starts: np.ndarray, out: np.ndarray, compiled, method: str) -> None:
+    """A typed list through the compiled loop, any other sequence run by run with `method`."""
     if isinstance(gens, List):
-        _fill_normal(gens, runs, starts, out)
+        compiled(gens, runs, starts, out)
         return
     for k, b in enumerate(runs.tolist()):
         lo, hi = int(starts[k]), int(starts[k + 1])
         if hi > lo:
-            gens[b].standard_normal(out=out[lo:hi])
+            getattr(gens[b], method)(out=out[lo:hi])
 
 
 @numba.njit(cache=True)

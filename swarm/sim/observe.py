@@ -124,17 +124,17 @@ class Observer:
         few = np.count_nonzero(here[stale], axis=1) <= BRUTE_NEAREST_ROBOTS
         for j in stale[~few].tolist():
             self._refresh_many(world.runs[runs[j]], runs[j], here[j])
+        run_ids = np.asarray(runs, dtype=np.intp)
         if few.any():  # every pair, all these runs in one pass
             js = stale[few]
-            picked = np.asarray(runs, dtype=np.intp)[js]
+            picked = run_ids[js]
             links = [world.runs[b].links for b in picked.tolist()]
             indptr = np.stack([x.indptr for x in links])
             starts = np.concatenate(([0], np.cumsum(indptr[:, -1], dtype=np.int64)))
             indices = np.concatenate([x.indices for x in links])
             tables, linked = self._tables, self._linked
             _refresh_few(world.robot_state, picked, here[js], indptr, indices, starts, tables, linked)
-        picked = np.asarray(runs, dtype=np.intp)[stale]
-        self._table_version[picked], self._table_on[picked] = versions[stale], here[stale]
+        self._table_version[run_ids[stale]], self._table_on[run_ids[stale]] = versions[stale], here[stale]
 
     def _observe_objects(self, world, runs: list[int], block: np.ndarray) -> None:
         """Body-frame offset to the nearest object found and not yet marked: every pair looked at

@@ -326,6 +326,14 @@ class World:
             gens = self._typed_streams[name] = List(self.stream(name))
         return gens
 
+    def stream_of(self, name: str, runs: Sequence[int]) -> List | list:
+        """The generators of stream `name` of `runs` (distinct, ascending), in order, for `draws`:
+        `stream_typed` when they are every run."""
+        if len(runs) == self.B:
+            return self.stream_typed(name)
+        gens = self.stream(name)
+        return [gens[b] for b in runs]
+
     def advance(self, wheels: np.ndarray, jet: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """One step of every run still going, with wheel (B, n, 2) rad/s and jet (B, n) N commands.
         Returns (B, n) robots the world took out of the mission this step (lost, expended,
@@ -609,9 +617,7 @@ class World:
         runs = [self.runs[b] for b in due]
         nets = [run.radio_net for run in runs]
         xy = self.robot_state[due, :, :2]
-        every = len(due) == self.B  # then `due` is every run, in order
-        radio = self.stream_typed("radio") if every else [self.stream("radio")[b] for b in due]
-        links = comms.update_nets(nets, xy, up, radio)
+        links = comms.update_nets(nets, xy, up, self.stream_of("radio", due))
         self.link_degree[due] = [x.degree for x in links]
         self.source_hops[due] = [x.source_hops for x in links]
         self.next_comms_s[due] = t + self.comms_period_s
@@ -673,9 +679,7 @@ class World:
         (a row per robot of those runs)."""
         assert self.hazard_model is not None
         n = self.n
-        every = len(runs) == self.B
-        gens = self.stream_typed("hazards") if every else [self.stream("hazards")[b] for b in runs]
-        losses = self.hazard_model.step(inp, gens, runs)
+        losses = self.hazard_model.step(inp, self.stream_of("hazards", runs), runs)
         radio_ok = self.radio_ok[runs].reshape(-1) & ~losses.radio_dropped
         self.radio_ok[runs] = radio_ok.reshape(len(runs), n)
         alive = self.alive[runs].reshape(-1)
