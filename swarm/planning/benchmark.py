@@ -239,7 +239,7 @@ def _run_benchmark(cm, profiles, tmp, start, goal, objective, time_s, runs, seed
 
     with _ompl_quiet():
         seed_ompl(ompl_seed(np.random.SeedSequence(seed)))
-        si = _space_information(cm)
+        si = _space_information(cm, [p.planner for p in profiles])
         space = si.getStateSpace()
         ss = og.SimpleSetup(si)
         ss.setStartAndGoalStates(_state(space, start), _state(space, goal))

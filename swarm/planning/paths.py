@@ -2,7 +2,9 @@
 
 The state space is `RealVectorStateSpace(2)` over the map's bounds. A state is valid when its cell
 is not `blocked` (the footprint-inflated grid); OMPL checks motions at points `resolution_m`
-apart, which the inflation margin covers (see `swarm.planning.costmap`). The objective is path
+apart, which the inflation margin covers (see `swarm.planning.costmap`). A motion is checked in
+one compiled pass over those points (`_motion_free`: the points and the answer of OMPL's
+`DiscreteMotionValidator`, without a Python call per point). The objective is path
 length (OMPL's own) or terrain cost: an `ob.OptimizationObjective` subclass whose `motionCost`
 is the exact integral of cost per metre along the segment, with `min_cost_per_m x distance` as
 its admissible heuristic.
@@ -30,6 +32,7 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 from functools import cache, cached_property
 
+import numba
 import numpy as np
 
 from swarm.planning.costmap import CostMap, NoPathError, format_point
@@ -127,13 +130,22 @@ def seed_ompl(seed: int) -> None:
         ou.setLogLevel(level)
 
 
-def _validity_checker(cm: CostMap) -> Callable[[object], bool]:
-    # one extra blocked row and column: a state on the map's north or east edge (x = xmax) reads it
+#: Planners that ask a motion for its last valid state (`checkMotion` with `lastValid`), which a
+#: Python motion validator cannot hand back through the bindings, so they keep OMPL's own
+#: validator: the KPIECE family, and PRM's roadmap expansion (random bounce motions).
+LAST_VALID_PLANNERS = frozenset({"KPIECE1", "BKPIECE1", "LBKPIECE1", "PRM", "PRMstar"})
+
+
+def _padded_grid(cm: CostMap) -> tuple[np.ndarray, int, float, float, float]:
+    """The blocked grid flattened with one extra blocked row and column (a state on the map's north
+    or east edge, x = xmax, reads it), its row stride, 1 / cell size and the origin."""
     padded = np.pad(cm.blocked, ((0, 1), (0, 1)), constant_values=True)
-    blocked = padded.astype(np.uint8).tobytes()
-    stride = padded.shape[1]
-    inv = 1.0 / cm.cell_m
-    ox, oy = cm.origin_m
+    return padded.ravel().astype(np.uint8), padded.shape[1], 1.0 / cm.cell_m, *map(float, cm.origin_m)
+
+
+def _validity_checker(cm: CostMap) -> Callable[[object], bool]:
+    flat, stride, inv, ox, oy = _padded_grid(cm)
+    blocked = flat.tobytes()
 
     def valid(state) -> bool:
         # OMPL keeps states inside the bounds, so both indices are >= 0
@@ -142,7 +154,46 @@ def _validity_checker(cm: CostMap) -> Callable[[object], bool]:
     return valid
 
 
-def _space_information(cm: CostMap):
+@numba.njit(cache=True)
+def _motion_free(blocked, stride, inv, ox, oy, x1, y1, x2, y2, longest) -> bool:
+    """OMPL's `DiscreteMotionValidator.checkMotion(s1, s2)` over the grid: s2 and the points j / nd
+    of the way for j = 1 .. nd - 1, nd = ceil(|s2 - s1| / longest valid segment), each
+    interpolated as `RealVectorStateSpace.interpolate` does; so the same points and the same
+    answer (it only says whether all are valid, not in which order they were looked at)."""
+    if blocked[int((y2 - oy) * inv) * stride + int((x2 - ox) * inv)]:
+        return False
+    dx, dy = x1 - x2, y1 - y2
+    nd = math.ceil(math.sqrt(dx * dx + dy * dy) / longest)
+    for j in range(1, nd):
+        t = float(j) / float(nd)
+        x = x1 + (x2 - x1) * t
+        y = y1 + (y2 - y1) * t
+        if blocked[int((y - oy) * inv) * stride + int((x - ox) * inv)]:
+            return False
+    return True
+
+
+@cache
+def _grid_motion_validator_class():
+    from ompl import base as ob
+
+    class GridMotionValidator(ob.MotionValidator):
+        """A motion checked in one compiled pass (`_motion_free`), not a Python call per point."""
+
+        def __init__(self, si, cm: CostMap) -> None:
+            super().__init__(si)
+            self._grid = _padded_grid(cm)
+            self._longest = si.getStateSpace().getLongestValidSegmentLength()
+
+        def checkMotion(self, s1, s2) -> bool:
+            return bool(_motion_free(*self._grid, s1[0], s1[1], s2[0], s2[1], self._longest))
+
+    return GridMotionValidator
+
+
+def _space_information(cm: CostMap, planners: Sequence[str] = ()):
+    """OMPL's space over `cm` for `planners` to run in (none: only the path simplifier), with the
+    grid motion validator unless one of them needs OMPL's own (`LAST_VALID_PLANNERS`)."""
     from ompl import base as ob
 
     space = ob.RealVectorStateSpace(2)
@@ -156,7 +207,10 @@ def _space_information(cm: CostMap):
     si = ob.SpaceInformation(space)
     si.setStateValidityChecker(_validity_checker(cm))
     si.setStateValidityCheckingResolution(cm.resolution_m / space.getMaximumExtent())
-    si.setup()
+    si.setup()  # fixes the longest valid segment the motion validator reads
+    if not LAST_VALID_PLANNERS.intersection(planners):
+        si.setMotionValidator(_grid_motion_validator_class()(si, cm))
+        si.setup()
     return si
 
 
@@ -328,7 +382,7 @@ def _plan_sampling(cm: CostMap, start, goal, profile: PlannerProfile, seed: int)
     from ompl import geometric as og
 
     seed_ompl(seed)
-    si = _space_information(cm)
+    si = _space_information(cm, (profile.planner,))
     space = si.getStateSpace()
     ss = og.SimpleSetup(si)
     ss.setStartAndGoalStates(_state(space, start), _state(space, goal))
@@ -374,7 +428,7 @@ def build_roadmap(cm: CostMap, profile: PlannerProfile, seed: int = 0) -> Roadma
     t0 = time.perf_counter()
     with _ompl_quiet():
         seed_ompl(oseed)
-        si = _space_information(cm)
+        si = _space_information(cm, (profile.planner,))
         planner = make_planner(si, profile)
         pdef = ob.ProblemDefinition(si)
         pdef.setOptimizationObjective(ob.PathLengthOptimizationObjective(si))
@@ -470,7 +524,7 @@ def _plan_roadmap(
     route = roadmap_route(cm, roadmap, start, goal, k)
     solve_ms = (time.perf_counter() - t0) * 1e3
     seed_ompl(seed)
-    si = _space_information(cm)
+    si = _space_information(cm)  # the roadmap answered: only the simplifier runs here
     space = si.getStateSpace()
     path = og.PathGeometric(si)
     for p in route:
