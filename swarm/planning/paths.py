@@ -132,7 +132,8 @@ def seed_ompl(seed: int) -> None:
 
 #: Planners that ask a motion for its last valid state (`checkMotion` with `lastValid`), which a
 #: Python motion validator cannot hand back through the bindings, so they keep OMPL's own
-#: validator: the KPIECE family, and PRM's roadmap expansion (random bounce motions).
+#: validator: the KPIECE family, and PRM's roadmap expansion (random bounce motions; its growth
+#: checks on the grid, `build_roadmap`).
 LAST_VALID_PLANNERS = frozenset({"KPIECE1", "BKPIECE1", "LBKPIECE1", "PRM", "PRMstar"})
 
 
@@ -191,6 +192,11 @@ def _grid_motion_validator_class():
     return GridMotionValidator
 
 
+def _check_motions_on_grid(si, cm: CostMap) -> None:
+    si.setMotionValidator(_grid_motion_validator_class()(si, cm))
+    si.setup()
+
+
 def _space_information(cm: CostMap, planners: Sequence[str] = ()):
     """OMPL's space over `cm` for `planners` to run in (none: only the path simplifier), with the
     grid motion validator unless one of them needs OMPL's own (`LAST_VALID_PLANNERS`)."""
@@ -209,8 +215,7 @@ def _space_information(cm: CostMap, planners: Sequence[str] = ()):
     si.setStateValidityCheckingResolution(cm.resolution_m / space.getMaximumExtent())
     si.setup()  # fixes the longest valid segment the motion validator reads
     if not LAST_VALID_PLANNERS.intersection(planners):
-        si.setMotionValidator(_grid_motion_validator_class()(si, cm))
-        si.setup()
+        _check_motions_on_grid(si, cm)
     return si
 
 
@@ -429,6 +434,8 @@ def build_roadmap(cm: CostMap, profile: PlannerProfile, seed: int = 0) -> Roadma
     with _ompl_quiet():
         seed_ompl(oseed)
         si = _space_information(cm, (profile.planner,))
+        own = si.getMotionValidator()
+        _check_motions_on_grid(si, cm)  # for the growth; the expansion needs OMPL's own
         planner = make_planner(si, profile)
         pdef = ob.ProblemDefinition(si)
         pdef.setOptimizationObjective(ob.PathLengthOptimizationObjective(si))
@@ -436,6 +443,7 @@ def build_roadmap(cm: CostMap, profile: PlannerProfile, seed: int = 0) -> Roadma
         planner.setup()
         planner.growRoadmapPtc(_termination(profile.roadmap.grow_iterations, None)[0])
         if profile.roadmap.expand_iterations:
+            si.setMotionValidator(own)  # its bounce motions ask for their last valid state
             planner.expandRoadmapPtc(_termination(profile.roadmap.expand_iterations, None)[0])
         data = ob.PlannerData(si)
         planner.getPlannerData(data)

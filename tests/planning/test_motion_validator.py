@@ -74,6 +74,20 @@ def test_paths_are_the_same_with_either_validator(wall_costmap, monkeypatch):
         np.testing.assert_array_equal(x, y)
 
 
+def test_a_roadmap_grown_with_the_grid_validator_is_omples_own(wall_costmap, monkeypatch):
+    """The growth checks motions on the grid, the expansion with OMPL's validator: the same
+    roadmap as OMPL's validator throughout."""
+    profile = profile_from_dict(
+        {"planner": "PRM", "roadmap": {"grow_iterations": 600, "expand_iterations": 200}}, name="t"
+    )
+    grid = paths.build_roadmap(wall_costmap, profile, seed=3)
+    monkeypatch.setattr(paths, "_check_motions_on_grid", lambda si, cm: None)
+    ompl = paths.build_roadmap(wall_costmap, profile, seed=3)
+    assert grid.n_vertices > 100
+    for field in ("vertices_m", "edges", "weights"):
+        np.testing.assert_array_equal(getattr(grid, field), getattr(ompl, field))
+
+
 @pytest.mark.parametrize("planner", PLANNERS)
 def test_every_planner_a_profile_may_name_plans_on_a_beach_sized_map(planner, gentle_costmap):
     """1000 m x 200 m, round deep water: no planner may crash the interpreter (ompl 2.0.1's AORRTC
