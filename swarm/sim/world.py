@@ -552,14 +552,13 @@ class World:
             self.t_s,
             rngs,
         )
-        for b in sorted(found):
-            if found[b]:
-                self.sensors.dirty(b)
-                run = self.runs[b]
-                run.score.detected = np.count_nonzero(run.minefield.detected)
-                self.score_stale[b] = True
+        for b in sorted(b for b, reports in found.items() if reports):  # most runs find nothing
+            self.sensors.dirty(b)
+            run = self.runs[b]
+            run.score.detected = np.count_nonzero(run.minefield.detected)
+            self.score_stale[b] = True
             for det in found[b]:
-                self._report(self.runs[b], det)
+                self._report(run, det)
 
     def _report(self, run: RunView, det: sensing.Detection) -> None:
         b = run.b
