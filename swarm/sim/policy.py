@@ -48,7 +48,7 @@ from swarm.planning.allocation import auction
 from swarm.sim.criteria import STATION_RADIUS_M
 from swarm.sim.layout import ROLES
 from swarm.sim.runview import FOLLOW, LOITER, MARK, RETURN, RETURNING, SEA, RunView
-from swarm.sim.standoff import SafeGround, free_cell_graph
+from swarm.sim.standoff import SafeGround
 
 #: Extra distance beyond the clearance standoff that robots retreat to (m).
 STANDOFF_MARGIN_M = 10.0
@@ -690,8 +690,7 @@ class ScriptedPolicy:
         and hold against the same finds many times)."""
         ground = self._safe_cached(objs, safe_m)
         if ground is None:
-            cm = self.env.plan.costmap
-            ground = SafeGround(cm, free_cell_graph(cm), objs, safe_m, dry=self.env.dry_ground)
+            ground = SafeGround(self.env.plan.costmap, objs, safe_m, dry=self.env.dry_ground)
             self._safe_cache = ((objs.tobytes(), safe_m), ground)
         return ground
 

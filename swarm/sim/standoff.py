@@ -3,57 +3,36 @@ nearest point clear of a set of marked mines, and the path there.
 
 The nearest safe point as the crow flies can lie behind a dune or a driftwood log, and an OMPL
 route around it may lead through the standoff instead of away from it (mine_clear lost robots
-that way). One multi-source Dijkstra (`scipy.sparse.csgraph.dijkstra`, `min_only`) from every safe
-cell over the cost map's free cells, 8-connected, answers for every robot at once.
+that way). One multi-source shortest-path search from every safe cell over the cost map's free
+cells, 8-connected (a step to any of the 8 neighbours that is free too, as long as the distance
+between centres), answers for every robot at once.
+
+The search is Dial's: with every step at least one cell long, cells in buckets one cell wide
+are settled bucket by bucket, in any order within a bucket, because no cell can shorten another in
+its own bucket. That is Dijkstra's answer without a heap: the same distances, float for float, as
+`scipy.sparse.csgraph.dijkstra` over the same graph (tested), several times faster on a beach-sized
+grid, which matters because a mine_clear run asks for a new field at each find. Among equally
+short ways out, a cell steps to the first neighbour in `STEPS` order (straight steps before
+diagonal ones), so the path does not depend on a heap's order.
 """
 
 from __future__ import annotations
 
-import weakref
+import math
 from functools import cached_property
 
+import numba
 import numpy as np
-from scipy.sparse import coo_matrix, csr_matrix
-from scipy.sparse.csgraph import dijkstra
 
 from swarm.planning.costmap import CostMap
 
-#: Neighbour offsets (row, col) of the 8-connected grid, each edge once.
-_STEPS = ((0, 1), (1, 0), (1, 1), (1, -1))
-
-
-#: `free_cell_graph` of each cost map in use (a batch's runs and their policies share one map).
-_GRAPHS: weakref.WeakKeyDictionary[CostMap, csr_matrix] = weakref.WeakKeyDictionary()
-
-
-def free_cell_graph(cm: CostMap) -> csr_matrix:
-    """The cost map's free cells as an undirected graph: node row * cols + col, edges to the 8
-    neighbours that are free too, weighted by the distance between centres (m). Built once per
-    cost map and shared: treat it as read-only."""
-    graph = _GRAPHS.get(cm)
-    if graph is None:
-        graph = _GRAPHS[cm] = _build_free_cell_graph(cm)
-    return graph
-
-
-def _build_free_cell_graph(cm: CostMap) -> csr_matrix:
-    rows, cols = cm.shape
-    free = ~cm.blocked
-    heads, tails, weights = [], [], []
-    for dr, dc in _STEPS:
-        r0, r1 = 0, rows - dr
-        c0, c1 = max(0, -dc), cols - max(0, dc)
-        a = free[r0:r1, c0:c1] & free[r0 + dr : r1 + dr, c0 + dc : c1 + dc]
-        r, c = np.nonzero(a)
-        r, c = r + r0, c + c0
-        heads.append(r * cols + c)
-        tails.append((r + dr) * cols + (c + dc))
-        weights.append(np.full(len(r), cm.cell_m * float(np.hypot(dr, dc))))
-    n = rows * cols
-    graph = coo_matrix(
-        (np.concatenate(weights), (np.concatenate(heads), np.concatenate(tails))), shape=(n, n)
-    )
-    return graph.tocsr()
+#: The 8 neighbour steps (row, col), straight ones first: the order in which a cell picks its next
+#: step among equally short ways to safe ground.
+STEPS = np.array([(0, 1), (1, 0), (0, -1), (-1, 0), (1, 1), (1, -1), (-1, 1), (-1, -1)], np.int64)
+#: Buckets kept at once: a step is under two cells long, so a cell in bucket k reaches k + 2 at most.
+_BUCKETS = 4
+#: Predecessor of a cell without one (safe, blocked or cut off), as scipy's.
+NO_STEP = -9999
 
 
 def near_any(cm: CostMap, objs: np.ndarray, radius_m: float) -> np.ndarray:
@@ -86,25 +65,17 @@ class SafeGround:
     def __init__(
         self,
         cm: CostMap,
-        graph: csr_matrix,
         objs: np.ndarray,
         safe_m: float,
         dry: np.ndarray | None = None,
     ) -> None:
         self.cm = cm
-        # masks over the whole grid (cheaper than indexing the free cells out first); the sources
-        # come out in node order, as the free cells' own order would give them
         safe = ~cm.blocked & ~near_any(cm, np.asarray(objs, dtype=np.float64).reshape(-1, 2), safe_m)
         if dry is not None and (safe & dry).any():
             safe &= dry
         sources = np.flatnonzero(safe)
-        if not len(sources):
-            self.dist = np.full(cm.shape[0] * cm.shape[1], np.inf)
-            self.pred = np.full(len(self.dist), -9999)
-            return
-        self.dist, self.pred, _ = dijkstra(
-            graph, directed=False, indices=sources, min_only=True, return_predecessors=True
-        )
+        free = np.ascontiguousarray(~cm.blocked)
+        self.dist, self.pred = _distances_to(free, sources, float(cm.cell_m))
 
     @cached_property
     def reach_m(self) -> float:
@@ -136,3 +107,97 @@ class SafeGround:
         cells = np.asarray(nodes[1:], dtype=np.intp)
         x, y = self.cm.center_of(cells // self.cm.shape[1], cells % self.cm.shape[1])
         return np.vstack([xy[None], np.column_stack([x, y])])
+
+
+def _distances_to(
+    free: np.ndarray, sources: np.ndarray, cell_m: float, capacity: int | None = None
+) -> tuple[np.ndarray, np.ndarray]:
+    """(rows * cols,) distance over `free` cells to the nearest of `sources` (flat indices; inf where
+    none can be reached) and each cell's next step there (`NO_STEP` on a source or cut off).
+    `capacity`: queue entries to start with (a cell is queued about once; more only by rounding),
+    quadrupled until the search fits."""
+    capacity = max(capacity or 2 * free.size, len(sources) + 1)  # the sources are queued first
+    while True:
+        dist, queued = _dial(free, sources, cell_m, capacity)
+        if queued <= capacity:
+            return dist, _next_steps(free, dist, cell_m)
+        capacity *= 4
+
+
+@numba.njit(cache=True)
+def _dial(free, sources, cell_m, capacity):
+    """Dial's multi-source search (module docstring). Returns the distances and how many entries it
+    queued: more than `capacity` means it ran out of room and stopped (call again with more)."""
+    rows, cols = free.shape
+    n = rows * cols
+    flat = free.ravel()
+    length = np.empty(8)
+    length[:4] = cell_m
+    length[4:] = cell_m * math.sqrt(2.0)
+    dist = np.full(n, np.inf)
+    # each bucket a linked list of queued entries (cell, its distance when queued)
+    cell = np.empty(capacity, np.int64)
+    key = np.empty(capacity)
+    after = np.empty(capacity, np.int64)
+    head = np.full(_BUCKETS, -1, np.int64)
+    used = 0
+    for s in sources:
+        dist[s] = 0.0
+        cell[used], key[used], after[used], head[0] = s, 0.0, head[0], used
+        used += 1
+    waiting = used
+    inv = 1.0 / cell_m
+    k = 0
+    while waiting > 0:
+        slot = k % _BUCKETS
+        e = head[slot]
+        head[slot] = -1
+        while e >= 0:
+            waiting -= 1
+            u, d = cell[e], key[e]
+            e = after[e]
+            if d == dist[u]:  # else queued again since, nearer
+                r, c = u // cols, u % cols
+                for q in range(8):
+                    rr, cc = r + STEPS[q, 0], c + STEPS[q, 1]
+                    if rr < 0 or rr >= rows or cc < 0 or cc >= cols:
+                        continue
+                    v = rr * cols + cc
+                    nd = d + length[q]
+                    if flat[v] and nd < dist[v]:
+                        if used == capacity:
+                            return dist, capacity + 1
+                        dist[v] = nd
+                        b = max(int(nd * inv), k) % _BUCKETS  # k itself only by rounding
+                        cell[used], key[used], after[used], head[b] = v, nd, head[b], used
+                        used += 1
+                        waiting += 1
+            if e < 0:  # entries queued into this bucket meanwhile (rounding)
+                e = head[slot]
+                head[slot] = -1
+        k += 1
+    return dist, used
+
+
+@numba.njit(cache=True)
+def _next_steps(free, dist, cell_m):
+    """Each reachable cell's step toward safe ground: the first neighbour in `STEPS` order through
+    which its distance is reached (exactly: the same sum that set it)."""
+    rows, cols = free.shape
+    flat = free.ravel()
+    length = np.empty(8)
+    length[:4] = cell_m
+    length[4:] = cell_m * math.sqrt(2.0)
+    pred = np.full(rows * cols, NO_STEP, np.int64)
+    for v in range(rows * cols):
+        dv = dist[v]
+        if not (0.0 < dv < np.inf):
+            continue
+        r, c = v // cols, v % cols
+        for q in range(8):
+            rr, cc = r + STEPS[q, 0], c + STEPS[q, 1]
+            u = rr * cols + cc
+            if 0 <= rr < rows and 0 <= cc < cols and flat[u] and dist[u] + length[q] == dv:
+                pred[v] = u
+                break
+    return pred

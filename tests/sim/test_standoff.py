@@ -1,7 +1,8 @@
-"""Getting clear of a blast over drivable ground: the path ends clear of every mine, runs over
-free cells only, is as long as the distance says, and is never shorter than the straight line;
-the cells near the mines are those a k-d tree finds; the router's batched `reachable_many`
-agrees with `reachable` point by point."""
+"""Getting clear of a blast over drivable ground: the distances are scipy's Dijkstra's over the
+8-connected free cells, float for float; each step is the first of the shortest in `STEPS` order;
+the path ends clear of every mine, runs over free cells only, is as long as the distance says,
+and is never shorter than the straight line; the cells near the mines are those a k-d tree finds;
+the router's batched `reachable_many` agrees with `reachable` point by point."""
 
 from __future__ import annotations
 
@@ -9,12 +10,14 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import dijkstra
 from scipy.spatial import cKDTree
 
 from swarm.mission.load import load_mission
 from swarm.planning import build_costmap
 from swarm.sim.router import Router
-from swarm.sim.standoff import SafeGround, free_cell_graph, near_any
+from swarm.sim.standoff import NO_STEP, STEPS, SafeGround, _distances_to, near_any
 
 MINE_CLEAR = Path(__file__).resolve().parents[2] / "missions" / "mine_clear.yaml"
 
@@ -29,7 +32,7 @@ def test_paths_to_safe_ground_are_free_clear_and_as_long_as_the_distance(costmap
     cm = costmap
     mines = np.array([[238.1, 113.2], [237.9, 98.0], [297.4, 106.6], [237.3, 125.9], [360.1, 108.6]])
     safe_m = 60.0
-    ground = SafeGround(cm, free_cell_graph(cm), mines, safe_m)
+    ground = SafeGround(cm, mines, safe_m)
     rng = np.random.default_rng(0)
     starts = mines[rng.integers(len(mines), size=200)] + rng.uniform(-50, 50, size=(200, 2))
     starts = starts[cm.is_free(starts[:, 0], starts[:, 1])]
@@ -57,13 +60,13 @@ def test_paths_to_safe_ground_are_free_clear_and_as_long_as_the_distance(costmap
 def test_reach_bounds_every_distance_to_safe_ground(costmap) -> None:
     cm = costmap
     mines = np.array([[238.1, 113.2], [237.9, 98.0], [297.4, 106.6]])
-    ground = SafeGround(cm, free_cell_graph(cm), mines, 60.0)
+    ground = SafeGround(cm, mines, 60.0)
     finite = ground.dist[np.isfinite(ground.dist)]
     assert ground.reach_m == finite.max() > 0
     rows, cols = np.nonzero(~cm.blocked)
     d = ground.distance_m(np.column_stack(cm.center_of(rows, cols)))
     assert (d[np.isfinite(d)] <= ground.reach_m).all()
-    nowhere = SafeGround(cm, free_cell_graph(cm), mines, 1e6)  # no cell is clear: none finite
+    nowhere = SafeGround(cm, mines, 1e6)  # no cell is clear: none finite
     assert nowhere.reach_m == -np.inf
 
 
@@ -81,8 +84,77 @@ def test_near_any_is_a_kd_tree_query_of_every_cell(costmap) -> None:
         assert np.array_equal(near_any(cm, objs, radius_m), want)
 
 
-def test_the_free_cell_graph_is_built_once_per_cost_map(costmap) -> None:
-    assert free_cell_graph(costmap) is free_cell_graph(costmap)
+def _scipy_distances(free: np.ndarray, sources: np.ndarray, cell_m: float) -> np.ndarray:
+    """The reference: scipy's multi-source Dijkstra over the free cells, each joined to its free
+    8 neighbours by the distance between centres."""
+    rows, cols = free.shape
+    heads, tails, weights = [], [], []
+    for dr, dc in ((0, 1), (1, 0), (1, 1), (1, -1)):
+        r0, r1, c0, c1 = 0, rows - dr, max(0, -dc), cols - max(0, dc)
+        r, c = np.nonzero(free[r0:r1, c0:c1] & free[r0 + dr : r1 + dr, c0 + dc : c1 + dc])
+        heads.append((r + r0) * cols + c + c0)
+        tails.append((r + r0 + dr) * cols + c + c0 + dc)
+        weights.append(np.full(len(r), cell_m * float(np.hypot(dr, dc))))
+    graph = coo_matrix(
+        (np.concatenate(weights), (np.concatenate(heads), np.concatenate(tails))), shape=(free.size,) * 2
+    ).tocsr()
+    if not len(sources):
+        return np.full(free.size, np.inf)
+    return dijkstra(graph, directed=False, indices=sources, min_only=True)
+
+
+def _check_steps(free: np.ndarray, dist: np.ndarray, pred: np.ndarray, cell_m: float) -> None:
+    """Each reachable cell not safe steps to the first neighbour in `STEPS` order whose distance
+    plus the step is exactly its own; safe, blocked and cut-off cells have no step."""
+    rows, cols = free.shape
+    lengths = cell_m * np.hypot(*STEPS.T.astype(float))
+    for v in range(free.size):
+        if not (0.0 < dist[v] < np.inf):
+            assert pred[v] == NO_STEP
+            continue
+        r, c = divmod(v, cols)
+        ways = [
+            (rr * cols + cc)
+            for (dr, dc), step in zip(STEPS.tolist(), lengths, strict=True)
+            if 0 <= (rr := r + dr) < rows
+            and 0 <= (cc := c + dc) < cols
+            and free[rr, cc]
+            and dist[rr * cols + cc] + step == dist[v]
+        ]
+        assert pred[v] == ways[0]
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_distances_are_scipys_dijkstra_on_small_grids(seed) -> None:
+    """Random free cells (walls reaching every edge, so steps off a row's end would show), random
+    sources (none, one, many), cell sizes that round differently."""
+    rng = np.random.default_rng(seed)
+    rows, cols = rng.integers(1, 40, size=2)
+    free = rng.random((rows, cols)) < rng.uniform(0.5, 0.95)
+    cell_m = [1.0, 0.5, 0.3, 2.7, 1e-3, 7.1][seed]
+    share = [0.0, 0.002, 0.05, 0.3, 0.02, 0.1][seed]
+    sources = np.flatnonzero(free.ravel() & (rng.random(free.size) < share))
+    dist, pred = _distances_to(free, sources, cell_m)
+    np.testing.assert_array_equal(dist, _scipy_distances(free, sources, cell_m))
+    _check_steps(free, dist, pred, cell_m)
+    # a queue that starts too small grows until the search fits, with the same answer
+    small = _distances_to(free, sources, cell_m, capacity=4)
+    np.testing.assert_array_equal(small[0], dist)
+    np.testing.assert_array_equal(small[1], pred)
+
+
+def test_distances_on_the_beach_are_scipys_dijkstra(costmap) -> None:
+    """mine_clear's map and mines, with and without the dry-ground rule."""
+    cm = costmap
+    mines = np.array([[238.1, 113.2], [237.9, 98.0], [297.4, 106.6], [237.3, 125.9], [360.1, 108.6]])
+    free = ~cm.blocked
+    dry = np.zeros(cm.shape, bool)
+    dry[cm.shape[0] // 2 :] = True
+    for kw in ({}, {"dry": dry}):
+        ground = SafeGround(cm, mines, 60.0, **kw)
+        sources = np.flatnonzero(ground.dist == 0.0)
+        assert len(sources) > 1000 and np.isfinite(ground.dist[ground.dist > 0]).sum() > 10_000
+        np.testing.assert_array_equal(ground.dist, _scipy_distances(free, sources, cm.cell_m))
 
 
 def test_reachable_many_is_reachable_of_each_point(costmap) -> None:
