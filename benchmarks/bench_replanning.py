@@ -24,33 +24,15 @@ import time
 from pathlib import Path
 
 import numpy as np
-from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import dijkstra
 
 from swarm.mission.load import load_mission
 from swarm.planning import build_costmap, paths
 from swarm.planning.costmap import CostMap
 from swarm.planning.profiles import DEFAULT_PROFILE
-from swarm.sim.standoff import SafeGround
+from swarm.sim.standoff import SafeGround, free_cell_graph
 
 MINE_CLEAR = Path(__file__).resolve().parents[1] / "missions" / "mine_clear.yaml"
-
-
-def scipy_graph(cm: CostMap):
-    """The free cells joined to their free 8 neighbours by the distance between centres."""
-    free = ~cm.blocked
-    rows, cols = cm.shape
-    heads, tails, weights = [], [], []
-    for dr, dc in ((0, 1), (1, 0), (1, 1), (1, -1)):
-        r0, r1, c0, c1 = 0, rows - dr, max(0, -dc), cols - max(0, dc)
-        r, c = np.nonzero(free[r0:r1, c0:c1] & free[r0 + dr : r1 + dr, c0 + dc : c1 + dc])
-        heads.append((r + r0) * cols + c + c0)
-        tails.append((r + r0 + dr) * cols + c + c0 + dc)
-        weights.append(np.full(len(r), cm.cell_m * float(np.hypot(dr, dc))))
-    n = rows * cols
-    return coo_matrix(
-        (np.concatenate(weights), (np.concatenate(heads), np.concatenate(tails))), shape=(n, n)
-    ).tocsr()
 
 
 def best_of(repeat: int, fn) -> tuple[float, object]:
@@ -63,7 +45,7 @@ def best_of(repeat: int, fn) -> tuple[float, object]:
 
 
 def bench_fields(cm: CostMap, rng: np.random.Generator, count: int, safe_m: float, repeat: int) -> None:
-    graph = scipy_graph(cm)
+    graph = free_cell_graph(~cm.blocked, cm.cell_m)
     free = np.argwhere(~cm.blocked)
     ours = theirs = 0.0
     equal = True

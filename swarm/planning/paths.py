@@ -161,17 +161,21 @@ def _motion_free(blocked, stride, inv, ox, oy, x1, y1, x2, y2, longest) -> bool:
     of the way for j = 1 .. nd - 1, nd = ceil(|s2 - s1| / longest valid segment), each
     interpolated as `RealVectorStateSpace.interpolate` does; so the same points and the same
     answer (it only says whether all are valid, not in which order they were looked at)."""
-    if blocked[int((y2 - oy) * inv) * stride + int((x2 - ox) * inv)]:
+    if _blocked_at(blocked, stride, inv, ox, oy, x2, y2):
         return False
     dx, dy = x1 - x2, y1 - y2
     nd = math.ceil(math.sqrt(dx * dx + dy * dy) / longest)
     for j in range(1, nd):
         t = float(j) / float(nd)
-        x = x1 + (x2 - x1) * t
-        y = y1 + (y2 - y1) * t
-        if blocked[int((y - oy) * inv) * stride + int((x - ox) * inv)]:
+        if _blocked_at(blocked, stride, inv, ox, oy, x1 + (x2 - x1) * t, y1 + (y2 - y1) * t):
             return False
     return True
+
+
+@numba.njit(cache=True, inline="always")
+def _blocked_at(blocked, stride, inv, ox, oy, x, y) -> bool:
+    """`_validity_checker`'s lookup, negated: the padded grid's cell under a state in the bounds."""
+    return blocked[int((y - oy) * inv) * stride + int((x - ox) * inv)]
 
 
 @cache

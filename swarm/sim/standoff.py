@@ -23,6 +23,7 @@ from functools import cached_property
 
 import numba
 import numpy as np
+from scipy.sparse import coo_matrix, csr_matrix
 
 from swarm.planning.costmap import CostMap
 
@@ -33,6 +34,23 @@ STEPS = np.array([(0, 1), (1, 0), (0, -1), (-1, 0), (1, 1), (1, -1), (-1, 1), (-
 _BUCKETS = 4
 #: Predecessor of a cell without one (safe, blocked or cut off), as scipy's.
 NO_STEP = -9999
+
+
+def free_cell_graph(free: np.ndarray, cell_m: float) -> csr_matrix:
+    """The graph the search walks, as scipy takes one: cell row * cols + col joined to each of its
+    8 neighbours that is free too by the distance between centres (each edge once: undirected).
+    The reference the search is checked and timed against with `scipy.sparse.csgraph.dijkstra`
+    (tests, `benchmarks/bench_replanning.py`)."""
+    rows, cols = free.shape
+    heads, tails, weights = [], [], []
+    for dr, dc in ((0, 1), (1, 0), (1, 1), (1, -1)):
+        r0, r1, c0, c1 = 0, rows - dr, max(0, -dc), cols - max(0, dc)
+        r, c = np.nonzero(free[r0:r1, c0:c1] & free[r0 + dr : r1 + dr, c0 + dc : c1 + dc])
+        heads.append((r + r0) * cols + c + c0)
+        tails.append((r + r0 + dr) * cols + c + c0 + dc)
+        weights.append(np.full(len(r), cell_m * float(np.hypot(dr, dc))))
+    edges = (np.concatenate(heads), np.concatenate(tails))
+    return coo_matrix((np.concatenate(weights), edges), shape=(free.size, free.size)).tocsr()
 
 
 def near_any(cm: CostMap, objs: np.ndarray, radius_m: float) -> np.ndarray:
@@ -131,9 +149,7 @@ def _dial(free, sources, cell_m, capacity):
     rows, cols = free.shape
     n = rows * cols
     flat = free.ravel()
-    length = np.empty(8)
-    length[:4] = cell_m
-    length[4:] = cell_m * math.sqrt(2.0)
+    length = _step_lengths(cell_m)
     dist = np.full(n, np.inf)
     # each bucket a linked list of queued entries (cell, its distance when queued)
     cell = np.empty(capacity, np.int64)
@@ -185,9 +201,7 @@ def _next_steps(free, dist, cell_m):
     which its distance is reached (exactly: the same sum that set it)."""
     rows, cols = free.shape
     flat = free.ravel()
-    length = np.empty(8)
-    length[:4] = cell_m
-    length[4:] = cell_m * math.sqrt(2.0)
+    length = _step_lengths(cell_m)
     pred = np.full(rows * cols, NO_STEP, np.int64)
     for v in range(rows * cols):
         dv = dist[v]
@@ -201,3 +215,12 @@ def _next_steps(free, dist, cell_m):
                 pred[v] = u
                 break
     return pred
+
+
+@numba.njit(cache=True)
+def _step_lengths(cell_m):
+    """The length of each of `STEPS` (m): a cell straight, its diagonal."""
+    length = np.empty(8)
+    length[:4] = cell_m
+    length[4:] = cell_m * math.sqrt(2.0)
+    return length

@@ -10,14 +10,13 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import dijkstra
 from scipy.spatial import cKDTree
 
 from swarm.mission.load import load_mission
 from swarm.planning import build_costmap
 from swarm.sim.router import Router
-from swarm.sim.standoff import NO_STEP, STEPS, SafeGround, _distances_to, near_any
+from swarm.sim.standoff import NO_STEP, STEPS, SafeGround, _distances_to, free_cell_graph, near_any
 
 MINE_CLEAR = Path(__file__).resolve().parents[2] / "missions" / "mine_clear.yaml"
 
@@ -85,22 +84,10 @@ def test_near_any_is_a_kd_tree_query_of_every_cell(costmap) -> None:
 
 
 def _scipy_distances(free: np.ndarray, sources: np.ndarray, cell_m: float) -> np.ndarray:
-    """The reference: scipy's multi-source Dijkstra over the free cells, each joined to its free
-    8 neighbours by the distance between centres."""
-    rows, cols = free.shape
-    heads, tails, weights = [], [], []
-    for dr, dc in ((0, 1), (1, 0), (1, 1), (1, -1)):
-        r0, r1, c0, c1 = 0, rows - dr, max(0, -dc), cols - max(0, dc)
-        r, c = np.nonzero(free[r0:r1, c0:c1] & free[r0 + dr : r1 + dr, c0 + dc : c1 + dc])
-        heads.append((r + r0) * cols + c + c0)
-        tails.append((r + r0 + dr) * cols + c + c0 + dc)
-        weights.append(np.full(len(r), cell_m * float(np.hypot(dr, dc))))
-    graph = coo_matrix(
-        (np.concatenate(weights), (np.concatenate(heads), np.concatenate(tails))), shape=(free.size,) * 2
-    ).tocsr()
+    """The reference: scipy's multi-source Dijkstra over the same graph."""
     if not len(sources):
         return np.full(free.size, np.inf)
-    return dijkstra(graph, directed=False, indices=sources, min_only=True)
+    return dijkstra(free_cell_graph(free, cell_m), directed=False, indices=sources, min_only=True)
 
 
 def _check_steps(free: np.ndarray, dist: np.ndarray, pred: np.ndarray, cell_m: float) -> None:
