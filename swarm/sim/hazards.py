@@ -525,8 +525,10 @@ class HazardModel:
             a margin, so never False where the exact look would find such a contact."""
             mf = self.minefields[b]
             live = ~(mf.exploded | mf.cleared | mf.marked)
+            if not _may_touch(xy[rows], mf.positions_m[live], mf.trigger_radius_m):
+                return False  # the usual case: a marker on its marked mine
             armed[b] = live.tolist()
-            return _may_touch(xy[rows], mf.positions_m[live], mf.trigger_radius_m)
+            return True
 
         for b, k, mines in self._by_run(self._mine_screen, self._mines, xy, on_map, run_of, worth):
             mf = self.minefields[b]

@@ -34,7 +34,7 @@ from swarm.mission.schema import Mission
 from swarm.sim.env import SimConfig, SwarmEnv
 from swarm.sim.layout import PHASES, ROLES
 from swarm.sim.memory import RECORD_EVERY_S, check_fits
-from swarm.sim.policy import ScriptedPolicy
+from swarm.sim.policy import BatchPolicy, ScriptedPolicy
 from swarm.sim.runview import RunView
 from swarm.sim.setup import MissionSetup
 from swarm.sim.world import World
@@ -216,7 +216,7 @@ def simulate_batch(
     world.score_every_step = False  # only the outcome is wanted
     world.reset(seeds)
     runs = world.runs
-    policies = [ScriptedPolicy(run) for run in runs]
+    policies = BatchPolicy(runs)
     recs = [_Recorder(run) for run in runs]
     next_record = [record_every_s] * len(runs)
     completed: list[float | None] = [None] * len(runs)
@@ -225,8 +225,7 @@ def simulate_batch(
         for b in world.off_map(live):  # the only runs `fast_forward` can skip ahead
             if world.fast_forward(b):
                 next_record[b] = max(next_record[b], runs[b].t_s)
-        for b in live:
-            policies[b].update()
+        policies.update(live)
         wheels, jet = world.controller_commands()
         ended, time_up, _ = world.advance(wheels, jet)
         world.finish(ended, time_up)

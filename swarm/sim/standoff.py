@@ -116,7 +116,8 @@ class SafeGround:
         just `xy` where it is safe already or no safe ground can be reached from it."""
         xy = np.asarray(xy, dtype=np.float64).reshape(2)
         node = int(self._node(xy))
-        if not np.isfinite(self.dist[node]):
+        d = float(self.dist[node])
+        if d == 0.0 or d == math.inf:  # on safe ground already (most retreats), or none reachable
             return xy[None]
         nodes = []
         while node >= 0:
