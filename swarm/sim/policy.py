@@ -662,32 +662,32 @@ class ScriptedPolicy:
         their marker on them, and those a marker is still on its way to."""
         env = self.env
         marked = env.object_marker >= 0
-        for i in np.flatnonzero(env.alive & env.on_map & (env.marking >= 0)):
+        for i in self._markers_on_the_way().tolist():  # one on its mine goes with it
             k = int(env.marking[i])
-            if env.object_marker[k] == i:
-                continue  # on its mine: it goes with it
-            if self._arrival_s(int(i), k) < time_left_s:
+            if self._arrival_s(i, k) < time_left_s:
                 marked[k] = True  # it will be there: keep clear of that mine too
                 continue
             for it in self.items:
                 if it.kind == "mark" and it.obj == k and it.taken_by == i:
                     it.taken_by = -1
                     self._news = True
-            self._gave_up.add((int(i), k))
-            env.set_command(int(i), LOITER)  # drops the mark
+            self._gave_up.add((i, k))
+            env.set_command(i, LOITER)  # drops the mark
         return marked
+
+    def _markers_on_the_way(self) -> np.ndarray:
+        """The robots marking a mine that are not on it yet, in index order."""
+        env = self.env
+        who = np.flatnonzero(env.alive & env.on_map & (env.marking >= 0))
+        return who[env.object_marker[env.marking[who]] != who]
 
     def _recheck_markers(self, time_left_s: float, safe_m: float) -> None:
         """During the hold, a marker that falls behind (detours, soft ground, a roll-over) gives
         the mark up as soon as it can no longer make it, and gets clear like everyone else (before
         the hold, `_clearance` drops it and the allocation parks it clear)."""
         env = self.env
-        late = [
-            int(i)
-            for i in np.flatnonzero(env.alive & env.on_map & (env.marking >= 0))
-            if env.object_marker[env.marking[i]] != i
-            and self._arrival_s(int(i), int(env.marking[i])) >= time_left_s
-        ]
+        on_the_way = self._markers_on_the_way().tolist()
+        late = [i for i in on_the_way if self._arrival_s(i, int(env.marking[i])) >= time_left_s]
         if not late:
             return
         objs = env.objects_m[self._drop_late_markers(time_left_s)]
