@@ -15,6 +15,8 @@ import math
 import numba
 import numpy as np
 
+from swarm.planning.detection import MIN_LATERAL_M
+
 #: Robots per grid cell the nearest-neighbour search aims at.
 _CELL_ROBOTS = 4.0
 #: Most grid cells along either side (a swarm strung out along a line).
@@ -446,6 +448,32 @@ def runs_near_pairs(
                     out_r.append(q)
                     out_j.append(j)
     return np.array(out_r, np.int64), np.array(out_j, np.int64)
+
+
+@numba.njit(cache=True)
+def pair_looks(
+    start: np.ndarray, end: np.ndarray, mines: np.ndarray, run: np.ndarray, r: np.ndarray, j: np.ndarray
+) -> np.ndarray:
+    """`swarm.planning.detection.inverse_cube_look(start[r], end[r], mines[run[r], j])` pair by
+    pair, operation for operation, without gathering the pairs' ends and mines first: each pair is
+    the step start[q] -> end[q] of screened robot q = r[p] and mine j[p] of its run."""
+    out = np.empty(len(r))
+    for p in range(len(r)):
+        q = r[p]
+        ax, ay = start[q, 0], start[q, 1]
+        vx, vy = end[q, 0] - ax, end[q, 1] - ay
+        length = math.sqrt(vx * vx + vy * vy)
+        if not length > 1e-12:
+            out[p] = 0.0  # a robot standing still looks at nothing
+            continue
+        ux, uy = vx / length, vy / length
+        wx, wy = mines[run[q], j[p], 0] - ax, mines[run[q], j[p], 1] - ay
+        s0 = -(wx * ux + wy * uy)
+        s1 = s0 + length
+        x = max(abs(ux * wy - uy * wx), MIN_LATERAL_M)
+        x2 = x * x
+        out[p] = (s1 / math.sqrt(x2 + s1 * s1) - s0 / math.sqrt(x2 + s0 * s0)) / x2
+    return out
 
 
 @numba.njit(cache=True)

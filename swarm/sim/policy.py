@@ -42,7 +42,6 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 from swarm.planning.allocation import auction
 from swarm.sim.criteria import STATION_RADIUS_M
@@ -150,7 +149,7 @@ class ScriptedPolicy:
         self._spread_seen: tuple[bytes, bytes] | None = None
         self._news = False
         self._safe_cache: tuple[tuple[bytes, float], SafeGround] | None = None
-        self._found_cache: tuple[tuple[int, int, int], np.ndarray, cKDTree | None] | None = None
+        self._found_cache: tuple[tuple[int, int, int], np.ndarray] | None = None
 
     # the step ------------------------------------------------------------------------------------
     def act(self) -> dict[str, dict]:
@@ -461,24 +460,28 @@ class ScriptedPolicy:
 
     def _inside_standoff(self, who: np.ndarray) -> tuple[np.ndarray, float, np.ndarray]:
         """The mines found so far, how far to keep from them (the clearance standoff and the
-        margin), and which of the robots `who` are closer than that to one."""
+        margin), and which of the robots `who` are closer than that to one: every pair (a few
+        robots and at most a few hundred finds; a k-d tree's query costs more), each distance
+        the square root of dx^2 + dy^2, as a k-d tree's."""
         env = self.env
-        objs, tree = self._found_mines()
+        objs = self._found_mines()
         safe_m = env.clearance.standoff_m + STANDOFF_MARGIN_M
-        if tree is None or not len(who):
+        if not len(objs) or not len(who):
             return objs, safe_m, who[:0]
-        return objs, safe_m, who[tree.query(env.robot_state[who, :2])[0] < safe_m]
+        xy = env.robot_state[who, :2]
+        dx = xy[:, None, 0] - objs[None, :, 0]
+        dy = xy[:, None, 1] - objs[None, :, 1]
+        return objs, safe_m, who[np.sqrt((dx * dx + dy * dy).min(axis=1)) < safe_m]
 
-    def _found_mines(self) -> tuple[np.ndarray, cKDTree | None]:
-        """Where the objects of the mark items are, in object order, and a k-d tree of them (kept
-        while the items and the objects stay the same)."""
+    def _found_mines(self) -> np.ndarray:
+        """Where the objects of the mark items are, in object order (kept while the items and the
+        objects stay the same)."""
         env = self.env
         key = (len(self.items), len(env.objects_m), id(env.objects_m))
         if self._found_cache is None or self._found_cache[0] != key:
             found = sorted({it.obj for it in self.items if it.kind == "mark"})
-            objs = env.objects_m[found]
-            self._found_cache = (key, objs, cKDTree(objs) if found else None)
-        return self._found_cache[1], self._found_cache[2]
+            self._found_cache = (key, env.objects_m[found])
+        return self._found_cache[1]
 
     def _marks_due(self, marks: list[WorkItem], free: np.ndarray) -> list[WorkItem]:
         """The marks that are due: all once nobody is searching any more, else those whose nearest
@@ -608,7 +611,7 @@ class ScriptedPolicy:
         if left > HOLD_HORIZON_S:
             return False
         safe_m = c.standoff_m + STANDOFF_MARGIN_M
-        ground = self._safe_cached(self._found_mines()[0], safe_m)
+        ground = self._safe_cached(self._found_mines(), safe_m)
         if ground is not None and self._retreat_s(ground.reach_m) < left:
             return False  # not even the farthest cell from safe ground is that far
         objs, safe_m, near = self._inside_standoff(np.flatnonzero(env.alive & env.on_map & (env.marking < 0)))

@@ -20,7 +20,6 @@ import math
 
 import numpy as np
 
-from swarm.planning.detection import inverse_cube_look
 from swarm.sim import draws, pair_kernels
 from swarm.sim.comms import sorted_unique
 from swarm.sim.sensing import _NEIGHBOUR_BINS, DENSE_PAIRS, SCREEN_MARGIN_M, Detection, MineSensor
@@ -212,7 +211,7 @@ class SensorBatch:
         draws.fill_uniform(rngs, ids, at, u)
         if not len(r):
             return
-        look = inverse_cube_look(start[r], end[r], self._mine_xy[run[r], j])
+        look = pair_kernels.pair_looks(start, end, self._mine_xy, run, r, j)
         hazard = self.sensors[int(ids[0])].sensor.width_m ** 2 / (8.0 * math.pi) * look
         hits = np.flatnonzero(u < -np.expm1(-hazard))
         if not len(hits):

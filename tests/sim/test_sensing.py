@@ -16,7 +16,7 @@ from shapely.geometry import box
 
 from swarm.mission.schema import LateralRange, Sensor
 from swarm.planning.coverage import detection_probability
-from swarm.planning.detection import INVERSE_CUBE_FLOOR
+from swarm.planning.detection import INVERSE_CUBE_FLOOR, inverse_cube_look
 from swarm.sim import pair_kernels
 from swarm.sim.mines import MineField
 from swarm.sim.sensing import (
@@ -431,6 +431,32 @@ def test_runs_near_pairs_are_the_dense_checks_of_each_run() -> None:
     want_r, want_j = np.nonzero((d2 <= radius2[:, None]) & target[run])
     np.testing.assert_array_equal(r, want_r)
     np.testing.assert_array_equal(j, want_j)
+
+
+def test_pair_looks_are_the_inverse_cube_looks_bit_for_bit() -> None:
+    """The compiled look of each (step, mine) pair is `inverse_cube_look` of the gathered pairs to
+    the last bit: robots standing still (no look), mines on a step's line (the lateral floor),
+    behind it, ahead of it and far off; each mine read from its own run's row."""
+    rng = np.random.default_rng(9)
+    start = rng.uniform(0, 50, size=(40, 2))
+    end = start + rng.normal(0, 0.6, size=(40, 2))
+    end[::5] = start[::5]  # standing still
+    mines = rng.uniform(0, 50, size=(3, 10, 2))
+    run = np.sort(rng.integers(0, 3, 40))
+    r = np.repeat(np.arange(40), 10)
+    j = np.tile(np.arange(10), 40)
+    on_line = r % 7 == 0  # some mines exactly on the step's line, beside and beyond its ends
+    mines_of = mines[run[r], j]
+    t = rng.uniform(-2, 3, size=len(r))
+    mines_of[on_line] = (start[r] + t[:, None] * (end[r] - start[r]))[on_line]
+    pairs = np.arange(len(r))  # every pair its own step and "run" row, so the line points stay
+    got = pair_kernels.pair_looks(start[r], end[r], mines_of[:, None], pairs, pairs, np.zeros_like(r))
+    want = inverse_cube_look(start[r], end[r], mines_of)
+    np.testing.assert_array_equal(got, want)  # the same floats, zeros where standing still
+    assert (want[np.isin(r, np.arange(0, 40, 5))] == 0).all() and (want > 0).sum() > 300
+    # the runs' own rows, as the sensors use them
+    got = pair_kernels.pair_looks(start, end, mines, run, r, j)
+    np.testing.assert_array_equal(got, inverse_cube_look(start[r], end[r], mines[run[r], j]))
 
 
 def test_screen_is_the_bin_lookup_and_jump_check() -> None:
