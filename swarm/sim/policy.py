@@ -41,6 +41,7 @@ import math
 from dataclasses import dataclass, field
 from typing import Any
 
+import numba
 import numpy as np
 
 from swarm.planning.allocation import auction
@@ -318,18 +319,11 @@ class ScriptedPolicy:
 
     # who is free ----------------------------------------------------------------------------------------
     def _idle(self) -> np.ndarray:
-        env = self.env
-        free_role = (env.role == SPARE) | (env.role == SEARCH)
-        return (
-            env.alive
-            & env.on_map
-            & free_role
-            & (env.command == FOLLOW)
-            & env.routes.done()
-            & (env.marking < 0)
-            & (env.phase != RETURNING)
-            & (env.phase >= SEA)
-        )
+        """Robots free for work: alive ashore, spares or searchers, following a route they have
+        finished, marking nothing, not on their way back to sea."""
+        e = self.env
+        cursor, end = e.routes.cursor, e.routes.end
+        return _idle_robots(e.alive, e.on_map, e.role, e.command, cursor, end, e.marking, e.phase)
 
     def _allocate(self) -> None:
         """Hand open items to idle robots that know of them, most valuable first: stations (a lost
@@ -770,3 +764,22 @@ class BatchPolicy:
                 policy.update()
                 self._quiet_until_s[b] = policy.quiet_until_s()
                 self._links_read[b] = policy.links_read
+
+
+@numba.njit(cache=True)
+def _idle_robots(alive, on_map, role, command, cursor, end, marking, phase):
+    """`ScriptedPolicy._idle` robot by robot (an allocation asks up to six times: one pass instead
+    of a dozen numpy calls on a few dozen robots)."""
+    out = np.empty(alive.shape[0], np.bool_)
+    for i in range(alive.shape[0]):
+        out[i] = (
+            alive[i]
+            and on_map[i]
+            and (role[i] == SPARE or role[i] == SEARCH)
+            and command[i] == FOLLOW
+            and cursor[i] >= end[i]
+            and marking[i] < 0
+            and phase[i] != RETURNING
+            and phase[i] >= SEA
+        )
+    return out

@@ -49,6 +49,7 @@ ROBOT_ARRAYS = (
     "command",
     "target_m",
     "marking",
+    "mark_placed",
     "role",
 )
 
@@ -196,6 +197,8 @@ class RunView:
             if prev != MARK or self.marking[i] != k:
                 # around obstacles, not into them: a robot pushing on a log spins until it is stuck
                 self.routes.set(i, self.router.route(self.robot_state[i, :2], self.objects_m[k]))
+            if self.marking[i] != k:
+                self.mark_placed[i] = False
             self.marking[i] = k
             self.target_m[i] = self.objects_m[k]
         elif command != MARK and self.marking[i] >= 0:
@@ -239,6 +242,7 @@ class RunView:
     def unmark(self, i: int) -> None:
         k = self.marking[i]
         self.marking[i] = -1
+        self.mark_placed[i] = False
         if k >= 0 and self.object_marker[k] == i:
             self.object_marker[k] = -1
             if self.object_mine[k] >= 0:

@@ -128,6 +128,9 @@ class World:
         self.command = np.full((b, n), FOLLOW, dtype=np.int64)
         self.target_m = np.zeros((b, n, 2))
         self.marking = np.full((b, n), -1, dtype=np.int64)  # object index a robot marks
+        # True: the robot has placed its mark on that object (the object's marker is the robot;
+        # cleared whenever `marking` changes), so `_update_marks` passes it by
+        self.mark_placed = np.zeros((b, n), bool)
         self.role = np.tile(setup.plan_role, (b, 1))
         self.link_degree = np.zeros((b, n), dtype=np.intp)
         self.source_hops = np.full((b, n), -1, dtype=np.intp)
@@ -245,6 +248,7 @@ class World:
         self.command[b] = FOLLOW
         self.target_m[b] = state[:, :2]
         self.marking[b] = -1
+        self.mark_placed[b] = False
         self.role[b] = s.plan_role
         self.pending_terminated[b] = False
         self.in_agents[b] = True
@@ -578,7 +582,8 @@ class World:
     def _update_marks(self) -> None:
         """Each marking robot within `MARK_RADIUS_M` of its object marks it, if nobody has yet:
         the distances of every run's markers at once, then the few marks, run by run."""
-        bs, who = np.nonzero(self.alive & (self.marking >= 0))  # run-major, as the runs log
+        # run-major, as the runs log; a robot on the mark it placed has nothing to do
+        bs, who = np.nonzero(self.alive & (self.marking >= 0) & ~self.mark_placed)
         if not len(bs):
             return
         k = self.marking[bs, who]
@@ -595,6 +600,7 @@ class World:
             run = self.runs[b]
             if run.object_marker[obj] < 0:
                 run.object_marker[obj] = i
+                run.mark_placed[i] = True
                 if run.object_mine[obj] >= 0:
                     run.minefield.marked[run.object_mine[obj]] = True
                 run.log_event("mark", i, object=obj, mine=int(run.object_mine[obj]))

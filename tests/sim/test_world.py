@@ -13,7 +13,7 @@ from swarm.mission.load import load_mission
 from swarm.mission.plan import plan_mission
 from swarm.sim import world as world_module
 from swarm.sim.run import MissionLog, simulate, simulate_batch
-from swarm.sim.runview import RunView
+from swarm.sim.runview import MARK, RunView
 from swarm.sim.setup import MissionSetup
 from swarm.sim.world import World
 
@@ -195,3 +195,54 @@ def test_the_score_changes_add_up_to_the_score_computed_afresh(tmp_path) -> None
     fresh = np.array([run.score._score() for run in world.runs])
     assert fresh.max() > 0  # mines were found
     assert np.allclose(total, fresh, rtol=0, atol=1e-12)
+
+
+def test_a_placed_mark_is_its_robots_until_the_robot_moves_on(mission_and_plan) -> None:
+    """`mark_placed` (the robots `_update_marks` passes by) holds only for a robot whose marking
+    object's marker is that robot, at every step of a busy batch driven by the scripted policy,
+    and it does hold for robots on their marks."""
+    from swarm.sim.policy import BatchPolicy
+
+    mission, plan = mission_and_plan
+    world = World(MissionSetup(mission, plan, dt_s=0.5, substep_s=0.25), len(SEEDS))
+    world.reset(SEEDS)
+    policies = BatchPolicy(world.runs)
+    placed_steps = 0
+    while world.in_agents.any():
+        policies.update(np.flatnonzero(world.in_agents.any(axis=1)).tolist())
+        wheels, jet = world.controller_commands()
+        ended, up, _ = world.advance(wheels, jet)
+        world.finish(ended, up)
+        for run in world.runs:
+            for i in np.flatnonzero(run.mark_placed).tolist():
+                assert run.marking[i] >= 0 and run.object_marker[run.marking[i]] == i, (run.b, i)
+            placed_steps += int(np.count_nonzero(run.mark_placed & run.alive))
+    assert placed_steps > 100
+
+
+def test_a_placed_mark_is_forgotten_when_its_robot_unmarks_or_marks_another(mission_and_plan) -> None:
+    mission, plan = mission_and_plan
+    world = World(MissionSetup(mission, plan, dt_s=0.5, substep_s=0.25), 2)
+    world.reset(SEEDS[:2])
+    run = world.runs[1]
+    run.on_map[:] = True
+    run.objects_m = np.array([[30.0, 20.0], [50.0, 25.0]])
+    run.object_mine = np.array([-1, -1])
+    run.object_marker = np.array([-1, -1])
+
+    def place(i: int, k: int) -> None:
+        run.set_command(i, MARK, run.objects_m[k])
+        run.robot_state[i, :2] = run.objects_m[k]
+        world._update_marks()
+        assert run.mark_placed[i] and run.object_marker[k] == i
+
+    place(2, 0)
+    run.unmark(2)
+    assert not run.mark_placed[2] and run.object_marker[0] == -1
+    place(2, 0)
+    run.set_command(2, MARK, run.objects_m[1])  # on to another object: not placed there yet
+    assert not run.mark_placed[2]
+    place(4, 1)
+    run.lose(4, "failure")
+    assert not run.mark_placed[4] and run.object_marker[1] == -1
+    assert not world.mark_placed[0].any()  # the other run's robots are untouched
