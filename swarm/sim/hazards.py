@@ -339,9 +339,15 @@ class HazardModel:
         self._stuck_s = np.zeros(self.runs * self.n)
         self._on_boulder = np.zeros(self.runs * self.n, dtype=bool)
         self._run_of = np.repeat(np.arange(self.runs, dtype=np.intp), self.n)
+        # every run's mine positions and flags, padded to the largest field (`_bind_mine_flags`)
+        self._mine_xy = np.full((self.runs, 0, 2), np.nan)
+        self._mine_flags = np.zeros((3, self.runs, 0), dtype=bool)  # exploded, cleared, marked
+        self._mine_real = np.zeros((self.runs, 0), dtype=bool)  # False: padding
+        self._mine_reach2 = np.zeros(self.runs)
         for b in range(self.runs):
             self._set_run(b, fields[b], rocks[b])
         self._screens()
+        self._bind_mine_flags(range(self.runs))
 
     @property
     def minefield(self) -> MineField:
@@ -369,6 +375,31 @@ class HazardModel:
         for b, mf, r in zip(runs, minefields, rocks, strict=True):
             self._set_run(int(b), mf, r)
         self._screens()
+        self._bind_mine_flags(runs)
+
+    def _bind_mine_flags(self, runs: Sequence[int]) -> None:
+        """Make the exploded, cleared and marked flags of the mine fields of `runs` views of one
+        (3, runs, widest field) array (every run's when the widest field grows), so which mines
+        can still go off is one expression for the whole batch (`_trigger_mines`). The fields'
+        owners write the flags in place, as before."""
+        width = max(len(mf) for mf in self.minefields)
+        if width > self._mine_flags.shape[2]:
+            self._mine_xy = np.full((self.runs, width, 2), np.nan)
+            self._mine_flags = np.zeros((3, self.runs, width), dtype=bool)
+            self._mine_real = np.zeros((self.runs, width), dtype=bool)
+            runs = range(self.runs)
+        for b in runs:
+            mf = self.minefields[b]
+            m = len(mf)
+            self._mine_xy[b] = np.nan
+            self._mine_xy[b, :m] = mf.positions_m
+            self._mine_real[b] = False
+            self._mine_real[b, :m] = True
+            self._mine_reach2[b] = contact_reach2(mf.trigger_radius_m)
+            for row, name in zip(self._mine_flags, ("exploded", "cleared", "marked"), strict=True):
+                row[b] = False
+                row[b, :m] = getattr(mf, name)
+                setattr(mf, name, row[b, :m])
 
     @property
     def stuck_s(self) -> np.ndarray:
@@ -480,18 +511,19 @@ class HazardModel:
         self._stuck_s[rows] = stuck_s
         return stuck_s >= STUCK_AFTER_S - _TIME_EPS_S
 
-    def _by_run(self, screen: _ContactScreen, indexes, xy, mask, run_of, worth=None):
+    def _by_run(self, screen: _ContactScreen, indexes, xy, mask, run_of, keep=None):
         """(run, local row, points) of every robot touching a point of its run's index, in row order.
-        `worth(b, rows)`, if given, says whether run b's screened robots `rows` are worth the exact
-        look: False when none of their contacts could do anything."""
+        `keep(sel, runs)`, if given, says which runs' screened robots (`sel`, of runs `runs`) are
+        worth the exact look: the others' contacts could do nothing."""
         sel = screen.screen(xy, mask, run_of)
         if sel.size == 0:
             return
-        runs = [0] if self.runs == 1 else run_of[sel]
+        runs = np.zeros(len(sel), np.intp) if self.runs == 1 else run_of[sel]
+        wanted = None if keep is None else keep(sel, runs)
         cuts = [] if self.runs == 1 else (np.flatnonzero(runs[1:] != runs[:-1]) + 1).tolist()
         for lo, hi in zip([0, *cuts], [*cuts, len(sel)], strict=True):
             b, part = int(runs[lo]), sel[lo:hi]
-            if worth is not None and not worth(b, part):
+            if wanted is not None and b not in wanted:
                 continue
             robots, near = indexes[b].exact(xy, part)
             for k, pts in zip(robots.tolist(), near, strict=True):
@@ -519,18 +551,19 @@ class HazardModel:
         """
         armed: dict[int, list[bool]] = {}  # each run's mines that can still go off
 
-        def worth(b: int, rows: np.ndarray) -> bool:
-            """Whether a robot of `rows` may touch a mine of run b that can still go off (not
-            exploded, cleared or marked): contacts with the others do nothing. A dense check with
-            a margin, so never False where the exact look would find such a contact."""
-            mf = self.minefields[b]
-            live = ~(mf.exploded | mf.cleared | mf.marked)
-            if not _may_touch(xy[rows], mf.positions_m[live], mf.trigger_radius_m):
-                return False  # the usual case: a marker on its marked mine
-            armed[b] = live.tolist()
-            return True
+        def keep(sel: np.ndarray, runs: np.ndarray) -> set[int]:
+            """The runs with a screened robot that may touch a mine that can still go off (not
+            exploded, cleared or marked): contacts with the others do nothing (the usual case is
+            a marker on its marked mine). A dense check with a margin far above rounding, so never
+            leaving out a run where the exact look would find such a contact."""
+            flags = self._mine_flags
+            live = self._mine_real & ~(flags[0] | flags[1] | flags[2])
+            wanted = set(runs[_armed_near(xy, sel, runs, self._mine_xy, live, self._mine_reach2)].tolist())
+            for b in wanted:
+                armed[b] = live[b, : len(self.minefields[b])].tolist()
+            return wanted
 
-        for b, k, mines in self._by_run(self._mine_screen, self._mines, xy, on_map, run_of, worth):
+        for b, k, mines in self._by_run(self._mine_screen, self._mines, xy, on_map, run_of, keep):
             mf = self.minefields[b]
             p = mf.trigger_probability
             i = k % self.n
@@ -554,23 +587,28 @@ class HazardModel:
             raise ValueError(f"dt_s must be > 0, got {inp.dt_s}")
 
 
-def _may_touch(xy: np.ndarray, points: np.ndarray, radius_m: float) -> bool:
-    """Whether a point of `xy` (k, 2) may lie within `radius_m` of one of `points`: a dense check
-    with a relative and absolute margin far above rounding, so True wherever an exact (k-d tree)
-    look would find a pair within the radius."""
+def contact_reach2(radius_m: float) -> float:
+    """The squared contact radius for dense checks: `radius_m` with a relative and absolute margin
+    far above rounding, so a check against it is True wherever an exact (k-d tree) look finds a
+    pair within `radius_m`."""
     reach = radius_m * (1.0 + 1e-9) + 1e-9
-    return _any_within(xy, points, reach * reach)
+    return reach * reach
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _any_within(xy, points, reach2):
-    """Whether any pair of `xy` and `points` is within sqrt(reach2), pair by pair."""
-    for i in range(xy.shape[0]):
-        for j in range(points.shape[0]):
-            dx, dy = xy[i, 0] - points[j, 0], xy[i, 1] - points[j, 1]
-            if dx * dx + dy * dy <= reach2:
-                return True
-    return False
+def _armed_near(xy, sel, runs, mine_xy, live, reach2):
+    """For each screened robot sel[q] of run runs[q]: whether a mine of its run that can still go
+    off (`live`) lies within sqrt(reach2[run]) of it (`contact_reach2` of the trigger radius)."""
+    out = np.zeros(sel.shape[0], np.bool_)
+    for q in range(sel.shape[0]):
+        i, b = sel[q], runs[q]
+        for j in range(live.shape[1]):
+            if live[b, j]:
+                dx, dy = xy[i, 0] - mine_xy[b, j, 0], xy[i, 1] - mine_xy[b, j, 1]
+                if dx * dx + dy * dy <= reach2[b]:
+                    out[q] = True
+                    break
+    return out
 
 
 def hidden_rocks(

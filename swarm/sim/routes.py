@@ -201,11 +201,14 @@ def clear_of(points: np.ndarray, avoid: np.ndarray, radius_m: float) -> tuple[np
     a = pts[:-1]
     leg = pts[1:] - a
     length = np.hypot(leg[:, 0], leg[:, 1])
-    u = leg / np.where(length > 1e-9, length, 1.0)[:, None]
+    moving = length > 1e-9
+    if not moving.any():  # a robot told to stay where it stands (a retreat from safe ground)
+        return pts.copy(), np.arange(len(pts))
+    u = leg / np.where(moving, length, 1.0)[:, None]
     rel = avoid[None, :, :] - a[:, None, :]  # (legs, points, 2)
     along = rel[..., 0] * u[:, None, 0] + rel[..., 1] * u[:, None, 1]
     across = rel[..., 1] * u[:, None, 0] - rel[..., 0] * u[:, None, 1]
-    near = (length[:, None] > 1e-9) & (np.abs(across) < radius_m)
+    near = moving[:, None] & (np.abs(across) < radius_m)
     near &= (along > -radius_m) & (along < length[:, None] + radius_m)
     per_leg = near.sum(axis=1)
     if not per_leg.any():

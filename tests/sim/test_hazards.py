@@ -681,3 +681,25 @@ def test_hidden_rocks_in_cells_are_the_same_poisson_process() -> None:
     every = np.vstack(draws)
     assert ((every >= 0.0) & (every <= 100.0)).all()
     assert hidden_rocks_in_cells(Hazards(), centers, 1.0, rng).shape == (0, 2)
+
+
+def test_a_batch_sees_its_fields_flags_as_their_owners_write_them_across_resets() -> None:
+    """The mine fields' flags are written in place by the world (marks, clearances) after the
+    model is made: a batch's mine contacts see them, and keep seeing each run's own when another
+    run is reset with a larger field."""
+    a = MineField(np.array([[0.0, 0.0], [10.0, 0.0]]), trigger_probability=1.0)
+    b = MineField(np.array([[0.0, 0.0]]), trigger_probability=1.0)
+    model = HazardModel(QUIET, Phases(), CLASSES, LIBRARY, [a, b], [np.empty((0, 2))] * 2, 1)
+    a.marked[0] = True  # as the world marks a mine
+    on_mine = make_inputs(2, xy=np.array([[0.1, 0.0], [0.1, 0.0]]))
+    rngs = [np.random.default_rng(1), np.random.default_rng(2)]
+    losses = model.step(on_mine, rngs, [0, 1])
+    np.testing.assert_array_equal(losses.mine, [-1, 0])  # run 0's marked mine is safe
+    assert b.exploded[0] and not a.exploded[0]
+    c = MineField(np.array([[5.0, 5.0], [6.0, 5.0], [7.0, 5.0]]), trigger_probability=1.0)
+    model.reset_runs([1], [c], [np.empty((0, 2))])  # a larger field: the batch's flags grow
+    assert not model.step(on_mine, rngs, [0, 1]).lost.any()  # run 0's mark is still there
+    a.marked[0] = False  # the marker leaves
+    losses = model.step(on_mine, rngs, [0, 1])
+    np.testing.assert_array_equal(losses.mine, [0, -1])
+    assert a.exploded[0] and not c.exploded.any()

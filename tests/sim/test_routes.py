@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
-from swarm.sim.hazards import _may_touch
+from swarm.sim.hazards import _armed_near, contact_reach2
 from swarm.sim.routes import CAPTURE_M, FINAL_CAPTURE_M, LOOKAHEAD_M, PASS_CROSS_TRACK_M, Routes
 
 
@@ -139,7 +139,10 @@ def test_may_pass_holds_every_robot_steer_clear_would_re_lay() -> None:
                 assert i in flagged
 
 
-def test_may_touch_is_true_wherever_the_tree_finds_a_contact() -> None:
+def test_the_armed_mine_check_is_true_wherever_the_tree_finds_a_contact() -> None:
+    """The dense check that lets the mine contacts skip a run (`_armed_near` at `contact_reach2`)
+    never misses a contact the k-d tree finds, robots exactly at the radius included; and a mine
+    that can no longer go off is never a contact."""
     rng = np.random.default_rng(6)
     for _ in range(200):
         points = rng.uniform(0.0, 5.0, size=(int(rng.integers(1, 8)), 2))
@@ -147,6 +150,9 @@ def test_may_touch_is_true_wherever_the_tree_finds_a_contact() -> None:
         r = float(rng.uniform(0.05, 1.0))
         if rng.random() < 0.3:  # a robot exactly at the radius of a point
             xy[0] = points[0] + [r, 0.0]
-        found = any(cKDTree(points).query_ball_point(xy, r, return_length=True))
-        if found:
-            assert _may_touch(xy, points, r)
+        sel, runs = np.arange(len(xy)), np.zeros(len(xy), np.intp)
+        live = np.ones((1, len(points)), bool)
+        near = _armed_near(xy, sel, runs, points[None], live, np.array([contact_reach2(r)]))
+        found = cKDTree(points).query_ball_point(xy, r, return_length=True) > 0
+        assert (near | ~found).all()
+        assert not _armed_near(xy, sel, runs, points[None], ~live, np.array([contact_reach2(r)])).any()
