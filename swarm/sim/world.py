@@ -544,7 +544,8 @@ class World:
         assert self.sensors is not None
         sensing_now = self.alive & self.on_map & (self.phase >= BEACH)
         xy = self.flat("robot_state")[:, :2]
-        flat_sensing = sensing_now.ravel() & np.isfinite(xy).all(axis=1)
+        # column by column: numpy's all(axis=1) over pairs costs ten times more
+        flat_sensing = sensing_now.ravel() & np.isfinite(xy[:, 0]) & np.isfinite(xy[:, 1])
         rngs = self.stream_typed("sensing")
         found = self.sensors.step(
             xy,
