@@ -106,7 +106,8 @@ class SensorBatch:
         """One step of the sensors of runs `runs`: arrays (B * n, ...) over every robot of the batch,
         run-major (`sensing` already without non-finite positions; `last_xy` each sensor's last
         positions, which this moves on); `t_s` (B,) each run's time, `rngs[b]` its sensing
-        stream. Returns each run's reports (mines found, then false alarms), as `update`."""
+        stream. Returns each run's reports (mines found, then false alarms), as `update`; a run
+        that reports nothing may be left out."""
         n = self.n
         out: dict[int, list[Detection]] = {}
         if self.runs == 1:  # one run: its sensor's own update, nothing to share
@@ -205,7 +206,8 @@ class SensorBatch:
         for b in ids[~dense].tolist():  # too many pairs for one pass over its mines: its own grid search
             rows = slice(b * n, (b + 1) * n)
             out[b] = self.sensors[b]._looks(xy[rows], sensing[rows], float(t_s[b]), rngs[b])
-        out.update({b: [] for b in ids[dense].tolist()})
+        if self.false_alarms:  # a run looked at gets its false alarms after its finds (`step`)
+            out.update({b: [] for b in ids[dense].tolist()})
         # each run's uniforms in its pairs' order (a run without pairs, dense or not, draws none)
         u = np.empty(len(r))
         draws.fill_uniform(rngs, ids, at, u)
