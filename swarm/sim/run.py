@@ -231,9 +231,10 @@ def simulate_batch(
         world.finish(ended, time_up)
         still = []
         times, running = world.t_s.tolist(), world.in_agents.any(axis=1).tolist()
+        scored = world.scored.tolist()  # success can have changed only where the score was looked at
         for b in live:
             t, going = times[b], running[b]
-            if completed[b] is None and runs[b].score.success():
+            if completed[b] is None and scored[b] and runs[b].score.success():
                 completed[b] = t
             if t + 1e-9 >= next_record[b] or not going:
                 recs[b].record()

@@ -145,6 +145,8 @@ class World:
         # (detections, recoveries) changed since it was last looked at, or that just began
         self.score_timed = np.zeros(b, bool)
         self.score_stale = np.ones(b, bool)
+        #: (B,) the runs whose criteria `_score` looked at this step: only theirs may have changed
+        self.scored = np.ones(b, bool)
         self.beach_started = np.zeros(b, bool)  # each run's `score.beach_start_s` is known
         self.object_count = np.zeros(b, dtype=np.int64)  # each run's objects found (`RunView`)
         self._streams: dict[str, list] = {}  # each run's generator of a stream, by stream
@@ -752,6 +754,7 @@ class World:
         ashore = self.alive & self.on_map & (self.phase >= BEACH)
         has_ashore = ashore.any(axis=1)
         due = self.score_timed | self.score_stale | time_up | (has_ashore & ~self.beach_started)
+        self.scored = due  # every other run's criteria have the values they had
         any_ashore = has_ashore.tolist()
         ended = time_up.tolist()
         times = self.t_s.tolist()
