@@ -34,6 +34,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 
+import numba
 import numpy as np
 from numba.typed import List
 from scipy.spatial import cKDTree
@@ -371,16 +372,13 @@ class World:
         )
         state[:] = res.state
         mv = moving.ravel()
-        self.flat("slip")[:] = np.where(mv, res.slip, 0.0)
-        sub = self.flat("submersion")
-        sub[:] = np.where(mv, res.submersion, sub)
-        ter = self.flat("terrain_now")
-        ter[:] = np.where(mv, res.terrain, ter)
-        self.flat("distance_m")[:] = np.where(mv, res.distance_m, 0.0)
-        at_sea = self.alive & (self.phase == SEA) & ~self.on_map
-        power = np.where(moving, res.power_w.reshape(self.B, n), 0.0) + np.where(at_sea, s.swim_power_w, 0.0)
-        power = power + np.where(self.alive & (self.phase != WAITING), s.hotel_power_w, 0.0)
-        self.energy_wh -= power * dt / 3600.0
+        at_sea = np.empty((self.B, n), bool)
+        _take_step(
+            mv, self.flat("alive"), self.flat("on_map"), self.flat("phase"), res.slip, res.submersion,
+            res.terrain, res.distance_m, res.power_w, float(s.swim_power_w), float(s.hotel_power_w), dt,
+            self.flat("slip"), self.flat("submersion"), self.flat("terrain_now"), self.flat("distance_m"),
+            self.flat("energy_wh"), at_sea.reshape(-1),
+        )  # fmt: skip
         hits = res.wave_hits.reshape(self.B, n) & moving
         self._flip(hits, res.wave_height_m.reshape(self.B, n))
         self.routes.advance(state[:, :2], mv)
@@ -791,3 +789,26 @@ class World:
 
 
 _NO_XY = np.empty((0, 2))
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _take_step(
+    moving, alive, on_map, phase, slip, submersion, terrain, distance_m, power_w, swim_w, hotel_w, dt,
+    slip_out, submersion_out, terrain_out, distance_out, energy_wh, at_sea,
+):  # fmt: skip
+    """What a step of the physics did, robot by robot, into the world's arrays: slip and distance
+    of the robots that moved (0 for the rest), their terrain and submersion (the rest keep theirs),
+    and every robot's energy: driving power, swimming at sea, the hotel load once launched (summed
+    and scaled in numpy's order). `at_sea` (out): alive, at sea, not yet on the map."""
+    for k in range(moving.shape[0]):
+        mv = moving[k]
+        slip_out[k] = slip[k] if mv else 0.0
+        distance_out[k] = distance_m[k] if mv else 0.0
+        if mv:
+            submersion_out[k] = submersion[k]
+            terrain_out[k] = terrain[k]
+        sea = alive[k] and phase[k] == SEA and not on_map[k]
+        at_sea[k] = sea
+        power = (power_w[k] if mv else 0.0) + (swim_w if sea else 0.0)
+        power = power + (hotel_w if alive[k] and phase[k] != WAITING else 0.0)
+        energy_wh[k] -= power * dt / 3600.0
