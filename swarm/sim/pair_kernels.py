@@ -451,6 +451,72 @@ def runs_near_pairs(
 
 
 @numba.njit(cache=True)
+def screened_pairs(
+    xy: np.ndarray,
+    last_xy: np.ndarray,
+    robots: np.ndarray,
+    n: int,
+    range_m: np.ndarray,
+    mine_count: np.ndarray,
+    mines: np.ndarray,
+    target: np.ndarray,
+    dense_pairs: int,
+):
+    """The (robot, mine) pairs a batch's sensors look at this step, for the screened `robots`
+    (global rows, run-major; n robots a run): each robot's step (its last position, or where it
+    is when it has none, to where it is), and the pairs within its run's radius of the step's
+    middle, the radius being the run's range plus its robots' largest half step (`runs_near_pairs`;
+    none for a run with more than `dense_pairs` robot-mine pairs). Returns the steps' starts and
+    ends, each robot's run, the runs (`ids`, in order), whether each was dense, the pairs (r, j)
+    and where each run's pairs start (`at`, one more than the runs). In numpy's arithmetic."""
+    k = robots.shape[0]
+    start = np.empty((k, 2))
+    end = np.empty((k, 2))
+    mid = np.empty((k, 2))
+    half = np.empty(k)
+    run = np.empty(k, np.int64)
+    for q in range(k):
+        i = robots[q]
+        run[q] = i // n
+        for c in range(2):
+            e = xy[i, c]
+            s = last_xy[i, c]
+            if not np.isfinite(s):
+                s = e
+            start[q, c] = s
+            end[q, c] = e
+            mid[q, c] = 0.5 * (s + e)
+        dx, dy = end[q, 0] - start[q, 0], end[q, 1] - start[q, 1]
+        half[q] = 0.5 * math.sqrt(dx * dx + dy * dy)
+    groups = 0
+    for q in range(k):
+        if q == 0 or run[q] != run[q - 1]:
+            groups += 1
+    ids = np.empty(groups, np.int64)
+    dense = np.empty(groups, np.bool_)
+    radius2 = np.empty(k)
+    g, q = 0, 0
+    while q < k:
+        lo, b, most = q, run[q], half[q]
+        q += 1
+        while q < k and run[q] == b:
+            most = max(most, half[q])
+            q += 1
+        radius = range_m[b] + most
+        ids[g] = b
+        dense[g] = (q - lo) * mine_count[b] <= dense_pairs
+        r2 = radius * radius if dense[g] else -1.0  # -1: nothing that near
+        for p in range(lo, q):
+            radius2[p] = r2
+        g += 1
+    r, j = runs_near_pairs(mid, run, mines, target, radius2)
+    at = np.empty(groups + 1, np.int64)
+    at[:groups] = np.searchsorted(run[r], ids)
+    at[groups] = len(r)
+    return start, end, run, ids, dense, r, j, at
+
+
+@numba.njit(cache=True)
 def pair_looks(
     start: np.ndarray, end: np.ndarray, mines: np.ndarray, run: np.ndarray, r: np.ndarray, j: np.ndarray
 ) -> np.ndarray:

@@ -185,24 +185,9 @@ class SensorBatch:
         pairs and look integrals of every run at once, then each run's uniforms from its own
         generator; only a run with a hit goes on to `MineSensor._found`."""
         n = self.n
-        run = robots // n
-        end = xy[robots]
-        start = last_xy[robots]
-        start = np.where(np.isfinite(start), start, end)
-        mid = 0.5 * (start + end)
-        half = 0.5 * np.sqrt(np.sum((end - start) ** 2, axis=1))
-        # each run's radius: the range plus its own robots' largest half step
-        cuts = np.flatnonzero(run[1:] != run[:-1]) + 1
-        firsts = np.concatenate(([0], cuts))
-        ids = run[firsts]
-        counts = np.append(cuts, len(run)) - firsts
-        radius = self._range[ids] + np.maximum.reduceat(half, firsts)
-        dense = counts * self._mine_count[ids] <= DENSE_PAIRS
-        # a run with too many pairs for the dense check has no pairs here (-1: nothing that near)
-        radius2 = np.repeat(np.where(dense, radius * radius, -1.0), counts)
-        # robot then mine within each run: the order each run draws in
-        r, j = pair_kernels.runs_near_pairs(mid, run, self._mine_xy, self._target, radius2)
-        at = np.append(np.searchsorted(run[r], ids), len(r))
+        start, end, run, ids, dense, r, j, at = pair_kernels.screened_pairs(
+            xy, last_xy, robots, n, self._range, self._mine_count, self._mine_xy, self._target, DENSE_PAIRS
+        )
         for b in ids[~dense].tolist():  # too many pairs for one pass over its mines: its own grid search
             rows = slice(b * n, (b + 1) * n)
             out[b] = self.sensors[b]._looks(xy[rows], sensing[rows], float(t_s[b]), rngs[b])

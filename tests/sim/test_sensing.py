@@ -459,6 +459,47 @@ def test_pair_looks_are_the_inverse_cube_looks_bit_for_bit() -> None:
     np.testing.assert_array_equal(got, inverse_cube_look(start[r], end[r], mines[run[r], j]))
 
 
+def test_screened_pairs_are_numpys_steps_radii_and_pairs() -> None:
+    """The compiled set-up of a batch's looks is, to the last bit, the numpy it replaced: each
+    step's ends (a robot without a last position looks from where it is), each run's radius from
+    its range and largest half step, no pairs for a run past the dense limit, and where each run's
+    pairs start."""
+    rng = np.random.default_rng(12)
+    n, runs, width = 6, 4, 9
+    xy = rng.uniform(0, 60, size=(runs * n, 2))
+    last = xy + rng.normal(0, 0.8, size=xy.shape)
+    last[::5] = np.nan
+    robots = np.sort(rng.choice(runs * n, size=15, replace=False))
+    range_m = rng.uniform(10, 30, size=runs)
+    count = np.array([9, 7, 0, 9])
+    mines = rng.uniform(0, 60, size=(runs, width, 2))
+    mines[1, 7:] = np.nan
+    target = rng.random((runs, width)) < 0.8
+    dense_limit = 3 * 9  # a run with more than three screened robots is past it
+    start, end, run, ids, dense, r, j, at = pair_kernels.screened_pairs(
+        xy, last, robots, n, range_m, count, mines, target, dense_limit
+    )
+    # the numpy of SensorBatch._looks before
+    want_run = robots // n
+    want_end = xy[robots]
+    want_start = np.where(np.isfinite(last[robots]), last[robots], want_end)
+    mid = 0.5 * (want_start + want_end)
+    half = 0.5 * np.sqrt(np.sum((want_end - want_start) ** 2, axis=1))
+    cuts = np.flatnonzero(want_run[1:] != want_run[:-1]) + 1
+    firsts = np.concatenate(([0], cuts))
+    want_ids = want_run[firsts]
+    counts = np.append(cuts, len(want_run)) - firsts
+    radius = range_m[want_ids] + np.maximum.reduceat(half, firsts)
+    want_dense = counts * count[want_ids] <= dense_limit
+    radius2 = np.repeat(np.where(want_dense, radius * radius, -1.0), counts)
+    want_r, want_j = pair_kernels.runs_near_pairs(mid, want_run, mines, target, radius2)
+    want_at = np.append(np.searchsorted(want_run[want_r], want_ids), len(want_r))
+    for got, want in ((start, want_start), (end, want_end), (run, want_run), (ids, want_ids),
+                      (dense, want_dense), (r, want_r), (j, want_j), (at, want_at)):  # fmt: skip
+        np.testing.assert_array_equal(got, want)
+    assert len(r) > 5 and not dense.all() and dense.any()
+
+
 def test_screen_is_the_bin_lookup_and_jump_check() -> None:
     rng = np.random.default_rng(8)
     n, size, offset, stride = 10, 7.5, 1 << 21, 1 << 44
