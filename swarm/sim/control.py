@@ -88,8 +88,11 @@ def drive_toward(
     bearing = np.arctan2(d[:, 1], d[:, 0])  # numpy's own arctan2 (libm's differs in the last bit)
     m = len(dist)
     wheels, jet = np.empty((m, 2)), np.empty(m)
+    speed = np.asarray(speed_mps, np.float64)
+    if speed.shape != (m,):  # one speed for all: np.full costs a tenth of np.broadcast_to
+        speed = np.full(m, speed) if speed.ndim == 0 else np.broadcast_to(speed, (m,))
     _drive(
-        state, bearing, dist, np.broadcast_to(np.asarray(speed_mps, np.float64), (m,)), submersion,
+        state, bearing, dist, speed, submersion,
         inverted, np.ones(m, bool) if moving is None else moving, limits.effective_half_track_m,
         limits.max_wheel_speed_mps, limits.wheel_radius_m, limits.jet_thrust_max_n, wheels, jet,
     )  # fmt: skip
