@@ -13,7 +13,8 @@ its own bucket. That is Dijkstra's answer without a heap: the same distances, fl
 `scipy.sparse.csgraph.dijkstra` over the same graph (tested), several times faster on a beach-sized
 grid, which matters because a mine_clear run asks for a new field at each find. Among equally
 short ways out, a cell steps to the first neighbour in `STEPS` order (straight steps before
-diagonal ones), so the path does not depend on a heap's order.
+diagonal ones), so the path does not depend on a heap's order; a path works out the steps of the
+cells it passes only (`_walk`), not a whole field of them.
 """
 
 from __future__ import annotations
@@ -92,8 +93,8 @@ class SafeGround:
         if dry is not None and (safe & dry).any():
             safe &= dry
         sources = np.flatnonzero(safe)
-        free = np.ascontiguousarray(~cm.blocked)
-        self.dist, self.pred = _distances_to(free, sources, float(cm.cell_m))
+        self._free = np.ascontiguousarray(~cm.blocked)
+        self.dist = _distances_to(self._free, sources, float(cm.cell_m))
 
     @cached_property
     def reach_m(self) -> float:
@@ -119,27 +120,23 @@ class SafeGround:
         d = float(self.dist[node])
         if d == 0.0 or d == math.inf:  # on safe ground already (most retreats), or none reachable
             return xy[None]
-        nodes = []
-        while node >= 0:
-            nodes.append(node)
-            node = int(self.pred[node])
-        cells = np.asarray(nodes[1:], dtype=np.intp)
+        cells = _walk(self._free, self.dist, float(self.cm.cell_m), node)
         x, y = self.cm.center_of(cells // self.cm.shape[1], cells % self.cm.shape[1])
         return np.vstack([xy[None], np.column_stack([x, y])])
 
 
 def _distances_to(
     free: np.ndarray, sources: np.ndarray, cell_m: float, capacity: int | None = None
-) -> tuple[np.ndarray, np.ndarray]:
+) -> np.ndarray:
     """(rows * cols,) distance over `free` cells to the nearest of `sources` (flat indices; inf where
-    none can be reached) and each cell's next step there (`NO_STEP` on a source or cut off).
-    `capacity`: queue entries to start with (a cell is queued once per improvement: about 1.2 times
-    on mine_clear's beach, at most once per neighbour), quadrupled until the search fits."""
+    none can be reached). `capacity`: queue entries to start with (a cell is queued once per
+    improvement: about 1.2 times on mine_clear's beach, at most once per neighbour), quadrupled
+    until the search fits."""
     capacity = max(capacity or 2 * free.size, len(sources) + 1)  # the sources are queued first
     while True:
         dist, queued = _dial(free, sources, cell_m, capacity)
         if queued <= capacity:
-            return dist, _next_steps(free, dist, cell_m)
+            return dist
         capacity *= 4
 
 
@@ -197,25 +194,47 @@ def _dial(free, sources, cell_m, capacity):
 
 
 @numba.njit(cache=True)
+def _step_of(flat, rows, cols, dist, length, v):
+    """Cell v's step toward safe ground: the first neighbour in `STEPS` order through which its
+    distance is reached (exactly: the same sum that set it); `NO_STEP` on safe ground, blocked or
+    cut-off cells."""
+    dv = dist[v]
+    if not (0.0 < dv < np.inf):
+        return NO_STEP
+    r, c = v // cols, v % cols
+    for q in range(8):
+        rr, cc = r + STEPS[q, 0], c + STEPS[q, 1]
+        u = rr * cols + cc
+        if 0 <= rr < rows and 0 <= cc < cols and flat[u] and dist[u] + length[q] == dv:
+            return u
+    return NO_STEP
+
+
+@numba.njit(cache=True)
 def _next_steps(free, dist, cell_m):
-    """Each reachable cell's step toward safe ground: the first neighbour in `STEPS` order through
-    which its distance is reached (exactly: the same sum that set it)."""
+    """Every cell's `_step_of` (a whole field of steps; a path needs only its own, `_walk`)."""
     rows, cols = free.shape
     flat = free.ravel()
     length = _step_lengths(cell_m)
-    pred = np.full(rows * cols, NO_STEP, np.int64)
+    pred = np.empty(rows * cols, np.int64)
     for v in range(rows * cols):
-        dv = dist[v]
-        if not (0.0 < dv < np.inf):
-            continue
-        r, c = v // cols, v % cols
-        for q in range(8):
-            rr, cc = r + STEPS[q, 0], c + STEPS[q, 1]
-            u = rr * cols + cc
-            if 0 <= rr < rows and 0 <= cc < cols and flat[u] and dist[u] + length[q] == dv:
-                pred[v] = u
-                break
+        pred[v] = _step_of(flat, rows, cols, dist, length, v)
     return pred
+
+
+@numba.njit(cache=True)
+def _walk(free, dist, cell_m, v):
+    """The cells from cell v (not included) step by step (`_step_of`) to safe ground: the steps of
+    the cells a path passes, not of the whole grid."""
+    rows, cols = free.shape
+    flat = free.ravel()
+    length = _step_lengths(cell_m)
+    out = []
+    u = _step_of(flat, rows, cols, dist, length, v)
+    while u >= 0:
+        out.append(u)
+        u = _step_of(flat, rows, cols, dist, length, u)
+    return np.array(out, dtype=np.int64)
 
 
 @numba.njit(cache=True)

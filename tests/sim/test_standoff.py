@@ -16,7 +16,16 @@ from scipy.spatial import cKDTree
 from swarm.mission.load import load_mission
 from swarm.planning import build_costmap
 from swarm.sim.router import Router
-from swarm.sim.standoff import NO_STEP, STEPS, SafeGround, _distances_to, free_cell_graph, near_any
+from swarm.sim.standoff import (
+    NO_STEP,
+    STEPS,
+    SafeGround,
+    _distances_to,
+    _next_steps,
+    _walk,
+    free_cell_graph,
+    near_any,
+)
 
 MINE_CLEAR = Path(__file__).resolve().parents[2] / "missions" / "mine_clear.yaml"
 
@@ -111,6 +120,20 @@ def _check_steps(free: np.ndarray, dist: np.ndarray, pred: np.ndarray, cell_m: f
         assert pred[v] == ways[0]
 
 
+def _check_walks(free: np.ndarray, dist: np.ndarray, pred: np.ndarray, cell_m: float) -> None:
+    """A path's walk, step by step from one cell, passes the cells the whole field's steps chain
+    from it, to a safe cell."""
+    for v in np.flatnonzero((dist > 0) & np.isfinite(dist)).tolist():
+        chain = []
+        u = int(pred[v])
+        while u != NO_STEP:
+            chain.append(u)
+            u = int(pred[u])
+        walk = _walk(free, dist, cell_m, v)
+        np.testing.assert_array_equal(walk, chain)
+        assert dist[walk[-1]] == 0.0
+
+
 @pytest.mark.parametrize("seed", range(6))
 def test_distances_are_scipys_dijkstra_on_small_grids(seed) -> None:
     """Random free cells (walls reaching every edge, so steps off a row's end would show), random
@@ -121,13 +144,13 @@ def test_distances_are_scipys_dijkstra_on_small_grids(seed) -> None:
     cell_m = [1.0, 0.5, 0.3, 2.7, 1e-3, 7.1][seed]
     share = [0.0, 0.002, 0.05, 0.3, 0.02, 0.1][seed]
     sources = np.flatnonzero(free.ravel() & (rng.random(free.size) < share))
-    dist, pred = _distances_to(free, sources, cell_m)
+    dist = _distances_to(free, sources, cell_m)
     np.testing.assert_array_equal(dist, _scipy_distances(free, sources, cell_m))
+    pred = _next_steps(free, dist, cell_m)
     _check_steps(free, dist, pred, cell_m)
+    _check_walks(free, dist, pred, cell_m)
     # a queue that starts too small grows until the search fits, with the same answer
-    small = _distances_to(free, sources, cell_m, capacity=4)
-    np.testing.assert_array_equal(small[0], dist)
-    np.testing.assert_array_equal(small[1], pred)
+    np.testing.assert_array_equal(_distances_to(free, sources, cell_m, capacity=4), dist)
 
 
 def test_distances_on_the_beach_are_scipys_dijkstra(costmap) -> None:
@@ -142,6 +165,18 @@ def test_distances_on_the_beach_are_scipys_dijkstra(costmap) -> None:
         sources = np.flatnonzero(ground.dist == 0.0)
         assert len(sources) > 1000 and np.isfinite(ground.dist[ground.dist > 0]).sum() > 10_000
         np.testing.assert_array_equal(ground.dist, _scipy_distances(free, sources, cm.cell_m))
+        # a path follows the field's steps cell by cell to safe ground
+        pred = _next_steps(free, ground.dist, cm.cell_m)
+        far = np.flatnonzero(np.isfinite(ground.dist) & (ground.dist > 30.0))[::997]
+        rows, cols = np.divmod(far, cm.shape[1])
+        x, y = cm.center_of(rows, cols)
+        for v, p in zip(far.tolist(), np.column_stack([x, y]), strict=True):
+            chain, u = [], int(pred[v])
+            while u != NO_STEP:
+                chain.append(u)
+                u = int(pred[u])
+            cx, cy = cm.center_of(np.array(chain) // cm.shape[1], np.array(chain) % cm.shape[1])
+            np.testing.assert_array_equal(ground.path(p), np.vstack([p[None], np.column_stack([cx, cy])]))
 
 
 def test_reachable_many_is_reachable_of_each_point(costmap) -> None:
