@@ -56,24 +56,35 @@ def free_cell_graph(free: np.ndarray, cell_m: float) -> csr_matrix:
 
 def near_any(cm: CostMap, objs: np.ndarray, radius_m: float) -> np.ndarray:
     """(rows, cols) bool: cells whose centre lies closer than `radius_m` to a point of `objs`. Each
-    point looks only at the window of cells around it, with the distance a k-d tree computes
-    (the root of the summed squared differences), so the mask is the one a query of every cell
-    against a `cKDTree` of `objs` gives (`distance < radius_m`), at a fraction of its cost. The
-    window's centres are a column of y by a row of x, broadcast: the same sums, without a grid of
-    indices to build and scatter through."""
+    point looks only at the window of cells around it (`CostMap.cell_of` of its corners, one cell
+    wider), with the centres `CostMap.center_of` gives and the distance a k-d tree computes (the
+    root of the summed squared differences), so the mask is the one a query of every cell against
+    a `cKDTree` of `objs` gives (`distance < radius_m`), at a fraction of its cost."""
     out = np.zeros(cm.shape, bool)
-    nrows, ncols = cm.shape
-    for ox, oy in objs.tolist():
-        r0, c0 = (int(v) for v in cm.cell_of(ox - radius_m, oy - radius_m))
-        r1, c1 = (int(v) for v in cm.cell_of(ox + radius_m, oy + radius_m))
+    points = np.ascontiguousarray(objs, dtype=np.float64).reshape(-1, 2)
+    x0, y0 = (float(v) for v in cm.origin_m)
+    _near_any(points, float(radius_m), x0, y0, float(cm.cell_m), out)
+    return out
+
+
+@numba.njit(cache=True)
+def _near_any(points, radius_m, x0, y0, cell_m, out):
+    """`near_any` point by point, in `cell_of`'s and `center_of`'s arithmetic."""
+    nrows, ncols = out.shape
+    for k in range(points.shape[0]):
+        ox, oy = points[k, 0], points[k, 1]
+        c0 = min(max(math.floor((ox - radius_m - x0) / cell_m), 0), ncols - 1)
+        r0 = min(max(math.floor((oy - radius_m - y0) / cell_m), 0), nrows - 1)
+        c1 = min(max(math.floor((ox + radius_m - x0) / cell_m), 0), ncols - 1)
+        r1 = min(max(math.floor((oy + radius_m - y0) / cell_m), 0), nrows - 1)
         r0, c0 = max(r0 - 1, 0), max(c0 - 1, 0)
         r1, c1 = min(r1 + 1, nrows - 1), min(c1 + 1, ncols - 1)
-        if r1 < r0 or c1 < c0:
-            continue
-        x, y = cm.center_of(np.arange(r0, r1 + 1)[:, None], np.arange(c0, c1 + 1)[None, :])
-        dx, dy = x - ox, y - oy
-        out[r0 : r1 + 1, c0 : c1 + 1] |= np.sqrt(dx * dx + dy * dy) < radius_m
-    return out
+        for r in range(r0, r1 + 1):
+            dy = (y0 + (r + 0.5) * cell_m) - oy
+            for c in range(c0, c1 + 1):
+                dx = (x0 + (c + 0.5) * cell_m) - ox
+                if math.sqrt(dx * dx + dy * dy) < radius_m:
+                    out[r, c] = True
 
 
 class SafeGround:
