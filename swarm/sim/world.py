@@ -582,21 +582,15 @@ class World:
 
     def _update_marks(self) -> None:
         """Each marking robot within `MARK_RADIUS_M` of its object marks it, if nobody has yet:
-        the distances of every run's markers at once, then the few marks, run by run."""
+        the distances of every run's markers at once (a marker's target is its object,
+        `RunView.set_command`), then the few marks, run by run."""
         # run-major, as the runs log; a robot on the mark it placed has nothing to do
         bs, who = np.nonzero(self.alive & (self.marking >= 0) & ~self.mark_placed)
         if not len(bs):
             return
         k = self.marking[bs, who]
-        obj_xy = np.empty((len(bs), 2))
-        unmarked = np.empty(len(bs), bool)  # as of the step's start: a superset of what gets marked
-        cuts = np.flatnonzero(bs[1:] != bs[:-1]).tolist()
-        for lo, hi in zip([0, *(c + 1 for c in cuts)], [*(c + 1 for c in cuts), len(bs)], strict=True):
-            run = self.runs[int(bs[lo])]
-            obj_xy[lo:hi] = run.objects_m[k[lo:hi]]
-            unmarked[lo:hi] = run.object_marker[k[lo:hi]] < 0
-        d = self.robot_state[bs, who, :2] - obj_xy
-        near = np.flatnonzero(unmarked & (np.hypot(d[:, 0], d[:, 1]) <= MARK_RADIUS_M))
+        d = self.robot_state[bs, who, :2] - self.target_m[bs, who]
+        near = np.flatnonzero(np.hypot(d[:, 0], d[:, 1]) <= MARK_RADIUS_M)
         for b, i, obj in zip(bs[near].tolist(), who[near].tolist(), k[near].tolist(), strict=True):
             run = self.runs[b]
             if run.object_marker[obj] < 0:

@@ -200,7 +200,7 @@ def test_the_score_changes_add_up_to_the_score_computed_afresh(tmp_path) -> None
 def test_a_placed_mark_is_its_robots_until_the_robot_moves_on(mission_and_plan) -> None:
     """`mark_placed` (the robots `_update_marks` passes by) holds only for a robot whose marking
     object's marker is that robot, at every step of a busy batch driven by the scripted policy,
-    and it does hold for robots on their marks."""
+    and it does hold for robots on their marks; a marking robot's target is its object."""
     from swarm.sim.policy import BatchPolicy
 
     mission, plan = mission_and_plan
@@ -216,6 +216,8 @@ def test_a_placed_mark_is_its_robots_until_the_robot_moves_on(mission_and_plan) 
         for run in world.runs:
             for i in np.flatnonzero(run.mark_placed).tolist():
                 assert run.marking[i] >= 0 and run.object_marker[run.marking[i]] == i, (run.b, i)
+            for i in np.flatnonzero(run.marking >= 0).tolist():  # `_update_marks` measures to it
+                assert np.array_equal(run.target_m[i], run.objects_m[run.marking[i]]), (run.b, i)
             placed_steps += int(np.count_nonzero(run.mark_placed & run.alive))
     assert placed_steps > 100
 
