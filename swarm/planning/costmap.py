@@ -223,6 +223,17 @@ class CostMap:
         inside, row, col = self._locate(x, y)
         return inside & (self.reason[row, col] == FREE)
 
+    def free_at(self, x: float, y: float) -> bool:
+        """`is_free` of one point, in plain floats (the same arithmetic, without numpy's per-call
+        cost on scalars: the simulator asks it of one robot at a time)."""
+        xmin, ymin, xmax, ymax = self.bounds_m
+        if not (xmin <= x <= xmax and ymin <= y <= ymax):
+            return False
+        rows, cols = self.blocked.shape
+        col = min(max(math.floor((x - float(self.origin_m[0])) / self.cell_m), 0), cols - 1)
+        row = min(max(math.floor((y - float(self.origin_m[1])) / self.cell_m), 0), rows - 1)
+        return not bool(self.blocked[row, col])
+
     def _locate(self, x: np.ndarray | float, y: np.ndarray | float) -> tuple[np.ndarray, ...]:
         """Whether each point lies inside the map, and its (clipped) cell."""
         xmin, ymin, xmax, ymax = self.bounds_m

@@ -39,7 +39,7 @@ class Router:
     def snap(self, xy: np.ndarray) -> np.ndarray:
         """(x, y) if a robot may stand there, else the centre of the nearest free cell."""
         x, y = float(xy[0]), float(xy[1])
-        if bool(self.cm.is_free(x, y)):
+        if self.cm.free_at(x, y):
             return np.array([x, y])
         r, c = (int(v) for v in self.cm.cell_of(x, y))
         r2, c2 = int(self._near_r[r, c]), int(self._near_c[r, c])
@@ -60,7 +60,7 @@ class Router:
         """A target a robot can get to: itself if free or open water (it swims there), else the
         nearest free cell (a track point on a driftwood log, in a boulder's footprint margin)."""
         x, y = float(xy[0]), float(xy[1])
-        if bool(self.cm.is_free(x, y)):
+        if self.cm.free_at(x, y):
             return np.array([x, y])
         r, c = (int(v) for v in self.cm.cell_of(x, y))
         return np.array([x, y]) if self.cm.reason[r, c] == NO_TRACTION else self.snap(xy)

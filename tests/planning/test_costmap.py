@@ -13,6 +13,7 @@ from swarm.planning.costmap import (
     IMPASSABLE_TERRAIN,
     NO_TRACTION,
     TOO_STEEP,
+    CostMap,
     EndpointError,
     NoPathError,
     build_costmap,
@@ -170,3 +171,20 @@ def test_keep_out_line_blocks_even_along_grid_lines(robot):
     assert (cm.reason[19:21, :] == KEEP_OUT_CODE).all()
     with pytest.raises(NoPathError):
         cm.check_endpoints((3.0, 5.0), (3.0, 15.0))
+
+
+def test_free_at_is_is_free_point_by_point(wall_costmap: CostMap) -> None:
+    """The scalar test the simulator asks of one robot gives `is_free`'s answer everywhere: inside,
+    on the map's edges and cell lines, just outside, and at NaN."""
+    cm = wall_costmap
+    x0, y0, x1, y1 = cm.bounds_m
+    rng = np.random.default_rng(5)
+    grid_lines = np.arange(x0 - 1, x1 + 1, cm.cell_m / 2)
+    xs = np.concatenate([rng.uniform(x0 - 3, x1 + 3, 3000), grid_lines, [x0, x1, np.nan]])
+    inside_y = rng.uniform(y0, y1, len(grid_lines))
+    ys = np.concatenate([rng.uniform(y0 - 3, y1 + 3, 3000), inside_y, [y1, y0, y0]])
+    with np.errstate(invalid="ignore"):  # NaN's cell is nonsense; its inside test says no
+        want = cm.is_free(xs, ys)
+    got = np.array([cm.free_at(float(x), float(y)) for x, y in zip(xs, ys, strict=True)])
+    np.testing.assert_array_equal(got, want)
+    assert want.any() and not want.all()
