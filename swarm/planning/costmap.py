@@ -229,10 +229,14 @@ class CostMap:
         xmin, ymin, xmax, ymax = self.bounds_m
         if not (xmin <= x <= xmax and ymin <= y <= ymax):
             return False
+        return not bool(self.blocked[self.cell_at(x, y)])
+
+    def cell_at(self, x: float, y: float) -> tuple[int, int]:
+        """`cell_of` of one finite point, in plain floats."""
         rows, cols = self.blocked.shape
         col = min(max(math.floor((x - float(self.origin_m[0])) / self.cell_m), 0), cols - 1)
         row = min(max(math.floor((y - float(self.origin_m[1])) / self.cell_m), 0), rows - 1)
-        return not bool(self.blocked[row, col])
+        return row, col
 
     def _locate(self, x: np.ndarray | float, y: np.ndarray | float) -> tuple[np.ndarray, ...]:
         """Whether each point lies inside the map, and its (clipped) cell."""

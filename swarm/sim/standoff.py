@@ -127,7 +127,8 @@ class SafeGround:
         """Waypoints (k, 2) from the free point `xy` along cell centres to the nearest safe cell;
         just `xy` where it is safe already or no safe ground can be reached from it."""
         xy = np.asarray(xy, dtype=np.float64).reshape(2)
-        node = int(self._node(xy))
+        row, col = self.cm.cell_at(float(xy[0]), float(xy[1]))
+        node = row * self.cm.shape[1] + col
         d = float(self.dist[node])
         if d == 0.0 or d == math.inf:  # on safe ground already (most retreats), or none reachable
             return xy[None]

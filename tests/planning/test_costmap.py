@@ -173,7 +173,7 @@ def test_keep_out_line_blocks_even_along_grid_lines(robot):
         cm.check_endpoints((3.0, 5.0), (3.0, 15.0))
 
 
-def test_free_at_is_is_free_point_by_point(wall_costmap: CostMap) -> None:
+def test_free_at_and_cell_at_are_is_free_and_cell_of_point_by_point(wall_costmap: CostMap) -> None:
     """The scalar test the simulator asks of one robot gives `is_free`'s answer everywhere: inside,
     on the map's edges and cell lines, just outside, and at NaN."""
     cm = wall_costmap
@@ -188,3 +188,6 @@ def test_free_at_is_is_free_point_by_point(wall_costmap: CostMap) -> None:
     got = np.array([cm.free_at(float(x), float(y)) for x, y in zip(xs, ys, strict=True)])
     np.testing.assert_array_equal(got, want)
     assert want.any() and not want.all()
+    rows, cols = cm.cell_of(xs[:-1], ys[:-1])
+    cells = np.array([cm.cell_at(float(x), float(y)) for x, y in zip(xs[:-1], ys[:-1], strict=True)])
+    np.testing.assert_array_equal(cells, np.column_stack([rows, cols]))
