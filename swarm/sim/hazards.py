@@ -339,10 +339,10 @@ class HazardModel:
         self._stuck_s = np.zeros(self.runs * self.n)
         self._on_boulder = np.zeros(self.runs * self.n, dtype=bool)
         self._run_of = np.repeat(np.arange(self.runs, dtype=np.intp), self.n)
-        # every run's mine positions and flags, padded to the largest field (`_bind_mine_flags`)
+        # every run's mine positions and flags, padded to the largest field with NaN positions,
+        # which no robot is ever near (`_bind_mine_flags`)
         self._mine_xy = np.full((self.runs, 0, 2), np.nan)
         self._mine_flags = np.zeros((3, self.runs, 0), dtype=bool)  # exploded, cleared, marked
-        self._mine_real = np.zeros((self.runs, 0), dtype=bool)  # False: padding
         self._mine_reach2 = np.zeros(self.runs)
         for b in range(self.runs):
             self._set_run(b, fields[b], rocks[b])
@@ -386,15 +386,12 @@ class HazardModel:
         if width > self._mine_flags.shape[2]:
             self._mine_xy = np.full((self.runs, width, 2), np.nan)
             self._mine_flags = np.zeros((3, self.runs, width), dtype=bool)
-            self._mine_real = np.zeros((self.runs, width), dtype=bool)
             runs = range(self.runs)
         for b in runs:
             mf = self.minefields[b]
             m = len(mf)
             self._mine_xy[b] = np.nan
             self._mine_xy[b, :m] = mf.positions_m
-            self._mine_real[b] = False
-            self._mine_real[b, :m] = True
             self._mine_reach2[b] = contact_reach2(mf.trigger_radius_m)
             for row, name in zip(self._mine_flags, ("exploded", "cleared", "marked"), strict=True):
                 row[b] = False
@@ -557,7 +554,7 @@ class HazardModel:
             a marker on its marked mine). A dense check with a margin far above rounding, so never
             leaving out a run where the exact look would find such a contact."""
             flags = self._mine_flags
-            live = self._mine_real & ~(flags[0] | flags[1] | flags[2])
+            live = ~(flags[0] | flags[1] | flags[2])  # padding too, but NaN is never near
             wanted = set(runs[_armed_near(xy, sel, runs, self._mine_xy, live, self._mine_reach2)].tolist())
             for b in wanted:
                 armed[b] = live[b, : len(self.minefields[b])].tolist()
@@ -598,7 +595,8 @@ def contact_reach2(radius_m: float) -> float:
 @numba.njit(cache=True, error_model="numpy")
 def _armed_near(xy, sel, runs, mine_xy, live, reach2):
     """For each screened robot sel[q] of run runs[q]: whether a mine of its run that can still go
-    off (`live`) lies within sqrt(reach2[run]) of it (`contact_reach2` of the trigger radius)."""
+    off (`live`) lies within sqrt(reach2[run]) of it (`contact_reach2` of the trigger radius); a
+    padding mine's NaN position is never within it."""
     out = np.zeros(sel.shape[0], np.bool_)
     for q in range(sel.shape[0]):
         i, b = sel[q], runs[q]

@@ -44,6 +44,7 @@ from typing import Any
 import numba
 import numpy as np
 
+from swarm.mission.schema import Mission
 from swarm.planning.allocation import auction
 from swarm.sim.criteria import STATION_RADIUS_M
 from swarm.sim.layout import ROLES
@@ -538,12 +539,9 @@ class ScriptedPolicy:
     # battery, clearance, return --------------------------------------------------------------------------
     def _battery(self) -> None:
         env = self.env
-        if not env.mission.phases.return_to_sea.enabled:
-            return
-        b = env.mission.hazards.battery
-        low = env.energy_wh <= b.reserve_fraction * b.capacity_wh
+        low = env.energy_wh <= battery_reserve_wh(env.mission)
         if not low.any():
-            return  # the usual step: nobody is low, whatever else holds
+            return  # the usual step (and always without a return to sea): nobody is low
         low &= env.alive & env.on_map & (env.command != RETURN) & (env.marking < 0)
         for i in np.flatnonzero(low):
             self._release_work(int(i), self._hearers(int(i)))
@@ -729,6 +727,14 @@ class ScriptedPolicy:
             env.set_command(int(i), RETURN)
 
 
+def battery_reserve_wh(mission: Mission) -> float:
+    """The charge at which a robot heads back to sea (-inf without a return to sea: never)."""
+    if not mission.phases.return_to_sea.enabled:
+        return -math.inf
+    battery = mission.hazards.battery
+    return battery.reserve_fraction * battery.capacity_wh
+
+
 class BatchPolicy:
     """The scripted policies of a batch's runs (`swarm.sim.world`), each run's `update` called only
     when it may do something (`ScriptedPolicy.quiet_until_s`, new events, a new radio graph, a
@@ -739,12 +745,7 @@ class BatchPolicy:
         self.runs = runs
         self.policies = [ScriptedPolicy(run) for run in runs]
         self.world = runs[0].world
-        battery = runs[0].mission.hazards.battery
-        self._reserve_wh = (
-            battery.reserve_fraction * battery.capacity_wh
-            if runs[0].mission.phases.return_to_sea.enabled
-            else -math.inf
-        )
+        self._reserve_wh = battery_reserve_wh(runs[0].mission)
         b = len(runs)
         self._quiet_until_s = np.full(b, -math.inf)
         self._links_read = np.full(b, -1, dtype=np.int64)

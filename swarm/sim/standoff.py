@@ -100,12 +100,11 @@ class SafeGround:
         dry: np.ndarray | None = None,
     ) -> None:
         self.cm = cm
-        safe = ~cm.blocked & ~near_any(cm, np.asarray(objs, dtype=np.float64).reshape(-1, 2), safe_m)
+        self._free = np.ascontiguousarray(~cm.blocked)
+        safe = self._free & ~near_any(cm, np.asarray(objs, dtype=np.float64).reshape(-1, 2), safe_m)
         if dry is not None and (safe & dry).any():
             safe &= dry
-        sources = np.flatnonzero(safe)
-        self._free = np.ascontiguousarray(~cm.blocked)
-        self.dist = _distances_to(self._free, sources, float(cm.cell_m))
+        self.dist = _distances_to(self._free, np.flatnonzero(safe), float(cm.cell_m))
 
     @cached_property
     def reach_m(self) -> float:
@@ -220,18 +219,6 @@ def _step_of(flat, rows, cols, dist, length, v):
         if 0 <= rr < rows and 0 <= cc < cols and flat[u] and dist[u] + length[q] == dv:
             return u
     return NO_STEP
-
-
-@numba.njit(cache=True)
-def _next_steps(free, dist, cell_m):
-    """Every cell's `_step_of` (a whole field of steps; a path needs only its own, `_walk`)."""
-    rows, cols = free.shape
-    flat = free.ravel()
-    length = _step_lengths(cell_m)
-    pred = np.empty(rows * cols, np.int64)
-    for v in range(rows * cols):
-        pred[v] = _step_of(flat, rows, cols, dist, length, v)
-    return pred
 
 
 @numba.njit(cache=True)

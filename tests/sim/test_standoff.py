@@ -21,7 +21,8 @@ from swarm.sim.standoff import (
     STEPS,
     SafeGround,
     _distances_to,
-    _next_steps,
+    _step_lengths,
+    _step_of,
     _walk,
     free_cell_graph,
     near_any,
@@ -97,6 +98,14 @@ def _scipy_distances(free: np.ndarray, sources: np.ndarray, cell_m: float) -> np
     if not len(sources):
         return np.full(free.size, np.inf)
     return dijkstra(free_cell_graph(free, cell_m), directed=False, indices=sources, min_only=True)
+
+
+def _next_steps(free: np.ndarray, dist: np.ndarray, cell_m: float) -> np.ndarray:
+    """Every cell's step toward safe ground (`_step_of`): the whole field a path's walk must
+    follow cell by cell."""
+    rows, cols = free.shape
+    flat, length = free.ravel(), _step_lengths(cell_m)
+    return np.array([_step_of(flat, rows, cols, dist, length, v) for v in range(free.size)], np.int64)
 
 
 def _check_steps(free: np.ndarray, dist: np.ndarray, pred: np.ndarray, cell_m: float) -> None:
