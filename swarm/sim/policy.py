@@ -616,7 +616,7 @@ class ScriptedPolicy:
             return False
         return self._retreat_s(float(far.max())) >= left
 
-    def _retreat_s(self, distance_m: float) -> float:
+    def _retreat_s(self, distance_m: float | np.ndarray) -> float | np.ndarray:
         """The time allowed to retreat `distance_m` over free ground (at cruise speed, with the
         retreat factor and allowance)."""
         return RETREAT_TIME_FACTOR * distance_m / self.env.limits.cruise_speed_mps + RETREAT_ALLOWANCE_S
@@ -625,7 +625,7 @@ class ScriptedPolicy:
         """Everyone but the markers stops; those within `safe_m` of a marked mine move clear first.
 
         A robot on its way to mark a mine keeps going if it can get there in `time_left_s`
-        (`_arrival_s`), else it gives the mark up and retreats; `_recheck_markers` keeps asking."""
+        (`_arrivals_s`), else it gives the mark up and retreats; `_recheck_markers` keeps asking."""
         env = self.env
         objs = env.objects_m[self._drop_late_markers(time_left_s)]
         for i in np.flatnonzero(env.alive & env.on_map & (env.marking < 0)):
@@ -638,17 +638,13 @@ class ScriptedPolicy:
                 continue
             env.set_command(int(i), LOITER)
 
-    def _arrival_s(self, i: int, k: int) -> float:
-        """The time robot i needs to reach object k: the rest of its route (at least the straight
-        line) at cruise speed, with the retreat factor's slack and allowance."""
+    def _arrivals_s(self, who: np.ndarray) -> np.ndarray:
+        """The time each marker of `who` needs to reach its object: the rest of its route (at
+        least the straight line) at cruise speed, with the retreat factor's slack and allowance."""
         env = self.env
-        xy = env.robot_state[i, :2]
-        rest = env.routes.remaining(i)
-        legs = np.empty_like(rest)  # from where it stands along the rest (no stacked copy of it)
-        if len(rest):
-            legs[0] = rest[0] - xy
-            np.subtract(rest[1:], rest[:-1], out=legs[1:])
-        length = max(float(np.hypot(legs[:, 0], legs[:, 1]).sum()), float(np.hypot(*(xy - env.objects_m[k]))))
+        xy = env.robot_state[who, :2]
+        straight = env.objects_m[env.marking[who]] - xy
+        length = np.maximum(env.routes.remaining_m(who, xy), np.hypot(straight[:, 0], straight[:, 1]))
         return self._retreat_s(length)
 
     def _drop_late_markers(self, time_left_s: float) -> np.ndarray:
@@ -657,9 +653,11 @@ class ScriptedPolicy:
         their marker on them, and those a marker is still on its way to."""
         env = self.env
         marked = env.object_marker >= 0
-        for i in self._markers_on_the_way().tolist():  # one on its mine goes with it
+        who = self._markers_on_the_way()  # one on its mine goes with it
+        on_time = (self._arrivals_s(who) < time_left_s).tolist()
+        for i, in_time in zip(who.tolist(), on_time, strict=True):
             k = int(env.marking[i])
-            if self._arrival_s(i, k) < time_left_s:
+            if in_time:
                 marked[k] = True  # it will be there: keep clear of that mine too
                 continue
             for it in self.items:
@@ -681,8 +679,8 @@ class ScriptedPolicy:
         the mark up as soon as it can no longer make it, and gets clear like everyone else (before
         the hold, `_clearance` drops it and the allocation parks it clear)."""
         env = self.env
-        on_the_way = self._markers_on_the_way().tolist()
-        late = [i for i in on_the_way if self._arrival_s(i, int(env.marking[i])) >= time_left_s]
+        on_the_way = self._markers_on_the_way()
+        late = on_the_way[self._arrivals_s(on_the_way) >= time_left_s].tolist()
         if not late:
             return
         objs = env.objects_m[self._drop_late_markers(time_left_s)]

@@ -62,6 +62,8 @@ class Routes:
         if self.cursor[i] >= self.end[i] or not len(avoid):
             return
         rest = self.points[self.cursor[i] : self.end[i]]
+        if (rest == xy).all():
+            return  # told to stay where it stands (a retreat from safe ground): no leg to side-step
         new, where = clear_of(np.vstack([xy[None], rest]), avoid, radius_m)
         if len(new) == len(rest) + 1:
             return  # nothing in the way
@@ -108,6 +110,16 @@ class Routes:
     def remaining_track(self, i: int) -> np.ndarray:
         """What is left of robot i's search track (the part from `sensing_from`)."""
         return self.points[max(self.cursor[i], self.sensing_from[i]) : self.end[i]].copy()
+
+    def remaining_m(self, robots: np.ndarray, xy: np.ndarray) -> np.ndarray:
+        """(k,) how far each of `robots` (standing at `xy` (k, 2)) has still to drive along its
+        route: from where it stands through the waypoints it still has to visit. Each the sum
+        numpy's `np.hypot(legs[:, 0], legs[:, 1]).sum()` gives, float for float (`_pairwise_sum`),
+        in one compiled pass over the robots."""
+        robots = np.asarray(robots, dtype=np.intp)
+        out = np.empty(len(robots))
+        _remaining_m(self.points, self.cursor, self.end, robots, np.ascontiguousarray(xy, np.float64), out)
+        return out
 
     def in_track(self) -> np.ndarray:
         """(n,) True while the robot is on the search-track part of its route."""
@@ -182,6 +194,9 @@ class RoutesView:
 
     def remaining_track(self, i: int) -> np.ndarray:
         return self.base.remaining_track(self.offset + i)
+
+    def remaining_m(self, robots: np.ndarray, xy: np.ndarray) -> np.ndarray:
+        return self.base.remaining_m(np.asarray(robots, dtype=np.intp) + self.offset, xy)
 
     def in_track(self) -> np.ndarray:
         return (
@@ -310,3 +325,75 @@ def _steer_points(points, start, end, cursor, xy, out):
             out[i, 0], out[i, 1] = points[end[i] - 1, 0], points[end[i] - 1, 1]
         else:
             out[i, 0], out[i, 1] = x, y
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _remaining_m(points, cursor, end, robots, xy, out):
+    """`Routes.remaining_m`: each robot's legs' lengths, then their sum as numpy sums them."""
+    longest = 0
+    for k in range(robots.shape[0]):
+        longest = max(longest, end[robots[k]] - cursor[robots[k]])
+    legs = np.empty(longest)
+    for k in range(robots.shape[0]):
+        i = robots[k]
+        c, e = cursor[i], end[i]
+        m = max(e - c, 0)
+        if m:
+            legs[0] = np.hypot(points[c, 0] - xy[k, 0], points[c, 1] - xy[k, 1])
+            for j in range(1, m):
+                a, b = c + j - 1, c + j
+                legs[j] = np.hypot(points[b, 0] - points[a, 0], points[b, 1] - points[a, 1])
+        out[k] = 0.0 + _pairwise_sum(legs, 0, m)
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _pairwise_sum(a, lo, n):
+    """The sum of a[lo:lo + n] in numpy's order (`pairwise_sum` of its add reduction: blocks of up
+    to 128 summed by `_block_sum`, halved above that), so a compiled pass adds up to the same
+    float. The halving walks an explicit stack: numba's cache cannot hold a recursive function."""
+    if n <= 128:
+        return _block_sum(a, lo, n)
+    frames = np.empty((192, 3), np.int64)  # (lo, n, halved already): depth 3 per halving, at most
+    values = np.empty(64)
+    frames[0, 0], frames[0, 1], frames[0, 2] = lo, n, 0
+    top, held = 1, 0
+    while top:
+        top -= 1
+        f_lo, f_n, halved = frames[top, 0], frames[top, 1], frames[top, 2]
+        if f_n <= 128:
+            values[held] = _block_sum(a, f_lo, f_n)
+            held += 1
+        elif halved:
+            held -= 1
+            values[held - 1] = values[held - 1] + values[held]  # the first half plus the second
+        else:
+            half = f_n // 2
+            half -= half % 8
+            frames[top, 2] = 1
+            frames[top + 1, 0], frames[top + 1, 1], frames[top + 1, 2] = f_lo + half, f_n - half, 0
+            frames[top + 2, 0], frames[top + 2, 1], frames[top + 2, 2] = f_lo, half, 0
+            top += 3
+    return values[0]
+
+
+@numba.njit(cache=True, error_model="numpy", inline="always")
+def _block_sum(a, lo, n):
+    """numpy's sum of a block of up to 128: one by one under 8, else eight running sums."""
+    if n < 8:
+        res = 0.0
+        for i in range(n):
+            res += a[lo + i]
+        return res
+    r0, r1, r2, r3 = a[lo], a[lo + 1], a[lo + 2], a[lo + 3]
+    r4, r5, r6, r7 = a[lo + 4], a[lo + 5], a[lo + 6], a[lo + 7]
+    i = 8
+    while i < n - n % 8:
+        b = lo + i
+        r0, r1, r2, r3 = r0 + a[b], r1 + a[b + 1], r2 + a[b + 2], r3 + a[b + 3]
+        r4, r5, r6, r7 = r4 + a[b + 4], r5 + a[b + 5], r6 + a[b + 6], r7 + a[b + 7]
+        i += 8
+    res = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
+    while i < n:
+        res += a[lo + i]
+        i += 1
+    return res

@@ -6,7 +6,14 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from swarm.sim.hazards import _armed_near, contact_reach2
-from swarm.sim.routes import CAPTURE_M, FINAL_CAPTURE_M, LOOKAHEAD_M, PASS_CROSS_TRACK_M, Routes
+from swarm.sim.routes import (
+    CAPTURE_M,
+    FINAL_CAPTURE_M,
+    LOOKAHEAD_M,
+    PASS_CROSS_TRACK_M,
+    Routes,
+    _pairwise_sum,
+)
 
 
 def _random_routes(rng: np.random.Generator, n: int) -> tuple[Routes, np.ndarray]:
@@ -156,3 +163,26 @@ def test_the_armed_mine_check_is_true_wherever_the_tree_finds_a_contact() -> Non
         found = cKDTree(points).query_ball_point(xy, r, return_length=True) > 0
         assert (near | ~found).all()
         assert not _armed_near(xy, sel, runs, points[None], ~live, np.array([contact_reach2(r)])).any()
+
+
+def test_the_length_left_is_numpys_sum_of_the_legs_float_for_float() -> None:
+    """`remaining_m` decides whether a marker makes it before a blast: it must be the very float
+    the per-robot numpy (`np.hypot(legs).sum()`, pairwise summation) gave, on routes from none to
+    hundreds of legs (past numpy's 128-element blocks and their halving)."""
+    rng = np.random.default_rng(3)
+    routes = Routes(60)
+    for i in range(60):
+        k = int(rng.integers(0, 700))
+        routes.set(i, rng.uniform(-50.0, 900.0, size=(k, 2)))
+        routes.cursor[i] = routes.start[i] + int(rng.integers(0, max(k // 3, 1)))
+    xy = rng.uniform(0.0, 100.0, size=(60, 2))
+    who = rng.permutation(60)[:45]
+    got = routes.remaining_m(who, xy[who])
+    for k, i in enumerate(who):
+        rest = routes.remaining(i)
+        legs = np.diff(np.vstack([xy[i][None], rest]), axis=0)
+        assert got[k] == float(np.hypot(legs[:, 0], legs[:, 1]).sum())
+    for n in [*range(300), 1000, 1031, 5000, 70_001]:
+        a = rng.uniform(0.0, 10.0, size=n) * 10.0 ** rng.uniform(-3, 3)
+        assert 0.0 + _pairwise_sum(a, 0, n) == a.sum()
+    assert len(routes.remaining_m(np.empty(0, np.intp), np.empty((0, 2)))) == 0
