@@ -312,19 +312,22 @@ def _leg(points, start, cur, x, y):
 def _steer_points(points, start, end, cursor, xy, out):
     """`Routes.steer_points`, robot by robot."""
     for i in range(xy.shape[0]):
-        x, y, cur = xy[i, 0], xy[i, 1], cursor[i]
-        if cur < end[i]:
-            px, py, lx, ly, length, along, _ = _leg(points, start[i], cur, x, y)
-            ahead = minimum(maximum(along, 0.0), length) + LOOKAHEAD_M
-            if length > 0 and ahead < length:
-                frac = ahead / maximum(length, 1e-12)
-                out[i, 0], out[i, 1] = px + lx * frac, py + ly * frac
-            else:
-                out[i, 0], out[i, 1] = points[cur, 0], points[cur, 1]
-        elif end[i] > start[i]:
-            out[i, 0], out[i, 1] = points[end[i] - 1, 0], points[end[i] - 1, 1]
-        else:
-            out[i, 0], out[i, 1] = x, y
+        out[i, 0], out[i, 1] = steer_point(points, start[i], end[i], cursor[i], xy[i, 0], xy[i, 1])
+
+
+@numba.njit(cache=True, error_model="numpy", inline="always")
+def steer_point(points, start, end, cur, x, y):
+    """Where one robot at (x, y) steers (`Routes.steer_points`), from its route's slice and cursor."""
+    if cur < end:
+        px, py, lx, ly, length, along, _ = _leg(points, start, cur, x, y)
+        ahead = minimum(maximum(along, 0.0), length) + LOOKAHEAD_M
+        if length > 0 and ahead < length:
+            frac = ahead / maximum(length, 1e-12)
+            return px + lx * frac, py + ly * frac
+        return points[cur, 0], points[cur, 1]
+    if end > start:
+        return points[end - 1, 0], points[end - 1, 1]
+    return x, y
 
 
 @numba.njit(cache=True, error_model="numpy")

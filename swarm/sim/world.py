@@ -44,7 +44,7 @@ from swarm.sim import comms, hazards, sensing
 from swarm.sim.control import drive_toward
 from swarm.sim.criteria import MissionScore
 from swarm.sim.mines import lay_mines
-from swarm.sim.routes import Routes
+from swarm.sim.routes import Routes, steer_point
 from swarm.sim.runview import (
     BEACH,
     DONE,
@@ -288,19 +288,12 @@ class World:
         target: the built-in controller (`swarm.sim.control`) of command mode and the policy."""
         s = self.setup
         state = self.flat("robot_state")
-        xy = state[:, :2]
-        command = self.flat("command")
-        done = self.routes.done()
-        # a robot at the end of its route keeps station there: back when it has drifted off
-        route_targets = self.routes.steer_points(xy)
-        gap = route_targets - xy
-        off_station = np.hypot(gap[:, 0], gap[:, 1]) > STATION_KEEP_M
-        follow = (command == FOLLOW) | (command == RETURN)
-        # a marker follows its route to the mine, then closes in on the mine itself
-        routed = follow | ((command == MARK) & ~done)
-        target = np.where(routed[:, None], route_targets, self.flat("target_m"))
-        hold = (command == LOITER) | (command == RELAY)
-        moving = self.flat("alive") & self.flat("on_map") & ~hold & ~(follow & done & ~off_station)
+        r = self.routes
+        target, moving = np.empty((len(state), 2)), np.empty(len(state), bool)
+        _command_targets(
+            r.points, r.start, r.end, r.cursor, state, self.flat("command"), self.flat("target_m"),
+            self.flat("alive"), self.flat("on_map"), target, moving,
+        )  # fmt: skip
         wheels, jet, _ = drive_toward(
             state,
             target,
@@ -806,3 +799,24 @@ def _take_step(
         power = (power_w[k] if mv else 0.0) + (swim_w if sea else 0.0)
         power = power + (hotel_w if alive[k] and phase[k] != WAITING else 0.0)
         energy_wh[k] -= power * dt / 3600.0
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _command_targets(points, start, end, cursor, state, command, target_m, alive, on_map, target, moving):
+    """`controller_commands`' target and whether each robot drives, robot by robot: a robot
+    following its route (or returning, or on its way to a mark) steers along it (`steer_point`),
+    a marker at its route's end closes in on its mine; one at the end of its route keeps station
+    there, driving back once it has drifted `STATION_KEEP_M` off; loitering and relaying robots
+    hold still."""
+    for i in range(state.shape[0]):
+        x, y, c = state[i, 0], state[i, 1], command[i]
+        tx, ty = steer_point(points, start[i], end[i], cursor[i], x, y)
+        done = cursor[i] >= end[i]
+        follow = c in (FOLLOW, RETURN)
+        if follow or (c == MARK and not done):
+            target[i, 0], target[i, 1] = tx, ty
+        else:
+            target[i, 0], target[i, 1] = target_m[i, 0], target_m[i, 1]
+        off_station = np.hypot(tx - x, ty - y) > STATION_KEEP_M
+        hold = c in (LOITER, RELAY)
+        moving[i] = alive[i] and on_map[i] and not hold and not (follow and done and not off_station)

@@ -248,3 +248,63 @@ def test_a_placed_mark_is_forgotten_when_its_robot_unmarks_or_marks_another(miss
     run.lose(4, "failure")
     assert not run.mark_placed[4] and run.object_marker[1] == -1
     assert not world.mark_placed[0].any()  # the other run's robots are untouched
+
+
+def _numpy_targets(world: World) -> tuple[np.ndarray, np.ndarray]:
+    """The controller's target and drive mask as first written in numpy, whole arrays at a time."""
+    from swarm.sim.runview import FOLLOW, LOITER, RELAY, RETURN
+
+    xy = world.flat("robot_state")[:, :2]
+    command = world.flat("command")
+    done = world.routes.done()
+    steer = world.routes.steer_points(xy)
+    gap = steer - xy
+    off_station = np.hypot(gap[:, 0], gap[:, 1]) > world_module.STATION_KEEP_M
+    follow = (command == FOLLOW) | (command == RETURN)
+    routed = follow | ((command == MARK) & ~done)
+    target = np.where(routed[:, None], steer, world.flat("target_m"))
+    hold = (command == LOITER) | (command == RELAY)
+    moving = world.flat("alive") & world.flat("on_map") & ~hold & ~(follow & done & ~off_station)
+    return target, moving
+
+
+def test_the_controllers_targets_are_the_numpy_rules_at_every_step(mission_and_plan, monkeypatch) -> None:
+    """`_command_targets` (one compiled pass) gives the target and drive mask the numpy rules give,
+    float for float, at every step of a busy batch under the scripted policy (following, marking,
+    loitering, relaying, keeping station and drifting off it)."""
+    from swarm.sim.policy import BatchPolicy
+
+    mission, plan = mission_and_plan
+    world = World(MissionSetup(mission, plan, dt_s=0.5, substep_s=0.25), len(SEEDS))
+    world.reset(SEEDS)
+    policies = BatchPolicy(world.runs)
+    seen, seen_args = [], []
+    kernel = world_module._command_targets
+
+    def checked(*args) -> None:
+        kernel(*args)
+        target, moving = _numpy_targets(world)
+        assert np.array_equal(args[-2], target) and np.array_equal(args[-1], moving)
+        seen.append(int(np.count_nonzero(moving)))
+        seen_args[:] = [(args[-2], args[-1])]
+
+    monkeypatch.setattr(world_module, "_command_targets", checked)
+    while world.in_agents.any():
+        policies.update(np.flatnonzero(world.in_agents.any(axis=1)).tolist())
+        wheels, jet = world.controller_commands()
+        ended, up, _ = world.advance(wheels, jet)
+        world.finish(ended, up)
+    assert len(seen) > 500 and len(set(seen)) > 5  # robots start, stop and start again
+    # keeping station: back once drifted `STATION_KEEP_M` off the route's end, still within it
+    world.reset(SEEDS)
+    run = world.runs[1]
+    run.on_map[:] = True
+    end = np.array([40.0, 20.0])
+    for i, offset in ((0, 1.5), (1, 0.5)):
+        run.set_route(i, np.array([[35.0, 20.0], end]))
+        run.routes.cursor[i] = run.routes.end[i]
+        run.robot_state[i, :2] = end + np.array([offset, 0.0])
+    world.controller_commands()
+    target, moving = seen_args[-1]
+    assert moving[world.n] and not moving[world.n + 1]
+    assert np.array_equal(target[world.n], end)
