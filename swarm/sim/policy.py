@@ -133,6 +133,7 @@ class ScriptedPolicy:
         # how long before the detonation `_clearance` starts checking (`_drop_late_markers` from
         # `HOLD_HORIZON_S`, `_hold_due` from then or from the lead if that is longer)
         self._watch_s = max(HOLD_HORIZON_S, self._lead_s + 1e-9)
+        self._reserve_wh = battery_reserve_wh(env.mission)
         self.reset()
 
     def reset(self) -> None:
@@ -150,7 +151,7 @@ class ScriptedPolicy:
         # spread changes nothing
         self._spread_seen: tuple[bytes, bytes] | None = None
         self._news = False
-        self._safe_cache: tuple[tuple[bytes, float], SafeGround] | None = None
+        self._safe_cache: tuple[tuple[bytes, float], SafeGround, np.ndarray] | None = None
         self._found_cache: tuple[tuple[int, int, int], np.ndarray] | None = None
 
     # the step ------------------------------------------------------------------------------------
@@ -166,15 +167,17 @@ class ScriptedPolicy:
             for i in np.flatnonzero(env.in_agents).tolist()
         }
 
-    def update(self) -> None:
+    def update(self, battery_low: bool = True) -> None:
         """Coordinate: set the environment's commands and routes for this step directly (a runner
-        then calls `env.advance({})`)."""
+        then calls `env.advance({})`). `battery_low` False: the caller has checked that no robot
+        is at its battery reserve (`BatchPolicy`, for every run at once)."""
         env = self.env
         if self._seen > len(env.events) and env.steps == 0:
             self.reset()
         self._read_events()
         self._spread()
-        self._battery()
+        if battery_low:
+            self._battery()
         self._clearance()
         self._return()
         if env.t_s + 1e-9 >= self._next_alloc_s and self._clearance_state != "holding":
@@ -293,6 +296,11 @@ class ScriptedPolicy:
         self._news = True
         self.items.append(WorkItem("mark", ROLES[env.role[finder]], env.objects_m[k].copy(), obj=k,
                                    audience=audience, created_s=env.t_s))  # fmt: skip
+
+    def spread(self) -> None:
+        """Pass news of open work over the radio graph when it has been updated (all `update` does
+        on a step with a new graph and nothing else due)."""
+        self._spread()
 
     def _spread(self) -> None:
         env = self.env
@@ -539,7 +547,7 @@ class ScriptedPolicy:
     # battery, clearance, return --------------------------------------------------------------------------
     def _battery(self) -> None:
         env = self.env
-        low = env.energy_wh <= battery_reserve_wh(env.mission)
+        low = env.energy_wh <= self._reserve_wh
         if not low.any():
             return  # the usual step (and always without a return to sea): nobody is low
         low &= env.alive & env.on_map & (env.command != RETURN) & (env.marking < 0)
@@ -700,8 +708,11 @@ class ScriptedPolicy:
 
     def _safe_cached(self, objs: np.ndarray, safe_m: float) -> SafeGround | None:
         """`_safe_ground` of these objects if it has been built already, else None."""
-        if self._safe_cache is not None and self._safe_cache[0] == (objs.tobytes(), safe_m):
-            return self._safe_cache[1]
+        cache = self._safe_cache
+        if cache is None:
+            return None
+        if (cache[2] is objs and cache[0][1] == safe_m) or cache[0] == (objs.tobytes(), safe_m):
+            return cache[1]  # the first test: `_found_mines` hands out the same array until they change
         return None
 
     def _safe_ground(self, objs: np.ndarray, safe_m: float) -> SafeGround:
@@ -710,7 +721,7 @@ class ScriptedPolicy:
         ground = self._safe_cached(objs, safe_m)
         if ground is None:
             ground = SafeGround(self.env.plan.costmap, objs, safe_m, dry=self.env.dry_ground)
-            self._safe_cache = ((objs.tobytes(), safe_m), ground)
+            self._safe_cache = ((objs.tobytes(), safe_m), ground, objs)
         return ground
 
     def _return(self) -> None:
@@ -752,16 +763,19 @@ class BatchPolicy:
         """Update the policies of the runs `live` that may act this step."""
         world = self.world
         # waking early is harmless (`update` finds nothing to do), so the times compare with slack
-        due = world.t_s + 1e-6 >= self._quiet_until_s
-        due |= world.links_version != self._links_read
-        due |= (world.energy_wh <= self._reserve_wh).any(axis=1)
-        due = due.tolist()
+        low = (world.energy_wh <= self._reserve_wh).any(axis=1)
+        due = ((world.t_s + 1e-6 >= self._quiet_until_s) | low).tolist()
+        heard = (world.links_version != self._links_read).tolist()
+        low = low.tolist()
         runs, policies = self.runs, self.policies
         for b in live:
             policy = policies[b]
             if due[b] or policy.events_read != len(runs[b].events):
-                policy.update()
+                policy.update(battery_low=low[b])
                 self._quiet_until_s[b] = policy.quiet_until_s()
+                self._links_read[b] = policy.links_read
+            elif heard[b]:  # a new radio graph alone: of all `update` does, only news can travel
+                policy.spread()
                 self._links_read[b] = policy.links_read
 
 

@@ -1,7 +1,8 @@
 """`BatchPolicy` updates a run's scripted policy only when it may act
 (`ScriptedPolicy.quiet_until_s`, new events, a new radio graph, a battery at its reserve). The
 contract that makes that safe, checked step by step on a busy run: whenever a step is quiet by
-those rules, `update` changes nothing. And a batch that skips the quiet updates gives the same
+those rules, `update` changes nothing, and when only the radio graph is new it does no more than
+`spread`. And a batch that skips the quiet updates gives the same
 runs as the runs alone, with a battery reserve reached as well."""
 
 from __future__ import annotations
@@ -72,26 +73,32 @@ def test_a_quiet_step_changes_nothing(tmp_path, tasks, hazards) -> None:
     policy = ScriptedPolicy(run)
     battery = mission.hazards.battery
     reserve_wh = battery.reserve_fraction * battery.capacity_wh
-    quiet = loud = 0
+    quiet = loud = heard = 0
     while world.in_agents.any():
         t = float(world.t_s[0])
-        if (
+        quiet_but_radio = (
             t + 1e-6 < policy.quiet_until_s()
             and policy.events_read == len(run.events)
-            and policy.links_read == int(world.links_version[0])
             and not (world.energy_wh[0] <= reserve_wh).any()
-        ):
+        )
+        if quiet_but_radio and policy.links_read == int(world.links_version[0]):
             before = _state(run, policy)
             policy.update()
             assert _state(run, policy) == before, f"t = {t}"
             quiet += 1
+        elif quiet_but_radio:  # a new radio graph alone: `update` does what `spread` does, no more
+            policy.spread()
+            spread = _state(run, policy)
+            policy.update()
+            assert _state(run, policy) == spread, f"t = {t}"
+            heard += 1
         else:
             policy.update()
             loud += 1
         wheels, jet = world.controller_commands()
         ended, up, _ = world.advance(wheels, jet)
         world.finish(ended, up)
-    assert quiet > 300 and loud > 300, (quiet, loud)  # both kinds many times
+    assert quiet > 300 and loud > 300 and heard > 50, (quiet, loud, heard)  # each kind many times
     kinds = {ev["kind"] for ev in run.events}
     assert "takeover" in kinds, kinds
     if tasks is TASKS:
