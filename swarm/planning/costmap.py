@@ -36,6 +36,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
 
+import numba
 import numpy as np
 import shapely
 from shapely.geometry import Point
@@ -246,57 +247,13 @@ class CostMap:
         return (x >= xmin) & (x <= xmax) & (y >= ymin) & (y <= ymax), row, col
 
     # cost and clearance along segments ------------------------------------------------------------
-    def _traverse(
-        self, p0: np.ndarray, p1: np.ndarray
-    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """Every cell each segment crosses, with the length inside it.
-
-        Returns (segment index, row, col, length_m) of the pieces between consecutive crossings of
-        grid lines, all segments at once (no Python loop over segments).
-        """
-        p0 = np.asarray(p0, dtype=np.float64).reshape(-1, 2)
-        p1 = np.asarray(p1, dtype=np.float64).reshape(-1, 2)
-        n = len(p0)
-        g0 = (p0 - self.origin_m) / self.cell_m
-        g1 = (p1 - self.origin_m) / self.cell_m
-        d = g1 - g0
-        lo = np.floor(np.minimum(g0, g1)).astype(np.int64)
-        hi = np.ceil(np.maximum(g0, g1)).astype(np.int64)
-        # grid lines strictly inside each segment's span: lo+1 .. hi-1 on each axis
-        counts = np.maximum(hi - lo - 1, 0)
-        pieces = [np.arange(n, dtype=np.int64), np.arange(n, dtype=np.int64)]
-        params = [np.zeros(n), np.ones(n)]
-        for axis in (0, 1):
-            c = counts[:, axis]
-            total = int(c.sum())
-            if not total:
-                continue
-            seg = np.repeat(np.arange(n, dtype=np.int64), c)
-            first = np.repeat(np.cumsum(c) - c, c)
-            line = np.repeat(lo[:, axis] + 1, c) + (np.arange(total) - first)
-            t = (line - g0[seg, axis]) / d[seg, axis]
-            pieces.append(seg)
-            params.append(t)
-        seg = np.concatenate(pieces)
-        t = np.clip(np.concatenate(params), 0.0, 1.0)
-        order = np.lexsort((t, seg))
-        seg, t = seg[order], t[order]
-        same = seg[1:] == seg[:-1]
-        s, ta, tb = seg[:-1][same], t[:-1][same], t[1:][same]
-        mid = 0.5 * (ta + tb)
-        xy = g0[s] + mid[:, None] * d[s]
-        col = np.clip(np.floor(xy[:, 0]).astype(np.intp), 0, self.shape[1] - 1)
-        row = np.clip(np.floor(xy[:, 1]).astype(np.intp), 0, self.shape[0] - 1)
-        length = (tb - ta) * np.hypot(d[s, 0], d[s, 1]) * self.cell_m
-        return s, row, col, length
-
     def segments_cost(self, p0: np.ndarray, p1: np.ndarray) -> np.ndarray:
-        """Exact integral of `cost_per_m` along each segment p0[i] -> p1[i]."""
-        p0 = np.asarray(p0, dtype=np.float64).reshape(-1, 2)
-        s, row, col, length = self._traverse(p0, p1)
-        pieces = np.zeros(len(length))
-        np.multiply(length, self.cost_per_m[row, col], out=pieces, where=length > 0)
-        return np.bincount(s, weights=pieces, minlength=len(p0))
+        """Exact integral of `cost_per_m` along each segment p0[i] -> p1[i]: each piece between
+        consecutive crossings of grid lines, its length times its cell's cost (`_walk_segments`)."""
+        p0, p1 = _segment_ends(p0, p1)
+        out = np.empty(len(p0))
+        _walk_segments(p0, p1, *self._grid(), self.cost_per_m, self.blocked, False, out)
+        return out
 
     def segment_cost_function(self):
         """A fast scalar `f(x0, y0, x1, y1) -> cost` for OMPL's per-motion callbacks: walks the cells
@@ -356,13 +313,16 @@ class CostMap:
 
     def segments_free(self, p0: np.ndarray, p1: np.ndarray) -> np.ndarray:
         """True for each segment that crosses only unblocked cells and stays inside the map."""
-        p0 = np.asarray(p0, dtype=np.float64).reshape(-1, 2)
-        p1 = np.asarray(p1, dtype=np.float64).reshape(-1, 2)
-        s, row, col, length = self._traverse(p0, p1)
-        hit = self.blocked[row, col] & (length > 0)
-        bad = np.bincount(s, weights=hit, minlength=len(p0)) > 0
-        ends = self.is_free(p0[:, 0], p0[:, 1]) & self.is_free(p1[:, 0], p1[:, 1])
-        return ~bad & ends
+        p0, p1 = _segment_ends(p0, p1)
+        crossed = np.empty(len(p0))
+        _walk_segments(p0, p1, *self._grid(), self.cost_per_m, self.blocked, True, crossed)
+        out = crossed == 0.0
+        _ends_free(p0, p1, *self._grid(), *self.bounds_m, self.blocked, out)
+        return out
+
+    def _grid(self) -> tuple[float, float, float]:
+        """The origin and cell size as `_walk_segments` takes them."""
+        return float(self.origin_m[0]), float(self.origin_m[1]), float(self.cell_m)
 
     def path_cost(self, points: np.ndarray) -> float:
         points = np.asarray(points, dtype=np.float64)
@@ -549,3 +509,71 @@ def build_costmap(
         speeds=speeds,
         climb_limit_deg=limit,
     )
+
+
+def _segment_ends(p0: np.ndarray, p1: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    return (
+        np.ascontiguousarray(p0, dtype=np.float64).reshape(-1, 2),
+        np.ascontiguousarray(p1, dtype=np.float64).reshape(-1, 2),
+    )
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _walk_segments(p0, p1, ox, oy, cell_m, cost, blocked, count_blocked, out):
+    """Every segment p0[i] -> p1[i] cut where it crosses a grid line (the crossing parameters
+    t = (line - g0) / d along it, with its ends 0 and 1, in order), each piece of positive length
+    looked up at its midpoint's cell (clipped to the grid). `out[i]`: the pieces' lengths times
+    their cells' `cost` added up in order; with `count_blocked`, how many pieces lie on `blocked`
+    cells instead (a segment with a non-finite end: NaN, or one blocked piece). The arithmetic of
+    the vectorized numpy it replaces, operation for operation (tested float for float)."""
+    rows, cols = cost.shape
+    ts = np.empty(64)
+    for i in range(p0.shape[0]):
+        gx0, gy0 = (p0[i, 0] - ox) / cell_m, (p0[i, 1] - oy) / cell_m
+        gx1, gy1 = (p1[i, 0] - ox) / cell_m, (p1[i, 1] - oy) / cell_m
+        dx, dy = gx1 - gx0, gy1 - gy0
+        if not (math.isfinite(dx) and math.isfinite(dy)):  # no grid walk from a point off every grid
+            out[i] = 1.0 if count_blocked else np.nan
+            continue
+        lo_x, hi_x = math.floor(min(gx0, gx1)), math.ceil(max(gx0, gx1))
+        lo_y, hi_y = math.floor(min(gy0, gy1)), math.ceil(max(gy0, gy1))
+        k = 2 + max(hi_x - lo_x - 1, 0) + max(hi_y - lo_y - 1, 0)
+        if k > ts.shape[0]:
+            ts = np.empty(2 * k)
+        ts[0], ts[1] = 0.0, 1.0
+        m = 2
+        for line in range(lo_x + 1, hi_x):
+            ts[m] = min(max((float(line) - gx0) / dx, 0.0), 1.0)
+            m += 1
+        for line in range(lo_y + 1, hi_y):
+            ts[m] = min(max((float(line) - gy0) / dy, 0.0), 1.0)
+            m += 1
+        t = np.sort(ts[:m])
+        hyp = np.hypot(dx, dy)
+        acc = 0.0
+        for q in range(m - 1):
+            ta, tb = t[q], t[q + 1]
+            length = (tb - ta) * hyp * cell_m
+            if not length > 0.0:
+                continue
+            mid = 0.5 * (ta + tb)
+            col = min(max(math.floor(gx0 + mid * dx), 0), cols - 1)
+            row = min(max(math.floor(gy0 + mid * dy), 0), rows - 1)
+            if count_blocked:
+                acc += 1.0 if blocked[row, col] else 0.0
+            else:
+                acc += length * cost[row, col]
+        out[i] = acc
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _ends_free(p0, p1, ox, oy, cell_m, xmin, ymin, xmax, ymax, blocked, out):
+    """`out[i] &=` both ends of segment i are free (`CostMap.is_free`'s test and arithmetic)."""
+    rows, cols = blocked.shape
+    for i in range(p0.shape[0]):
+        for x, y in ((p0[i, 0], p0[i, 1]), (p1[i, 0], p1[i, 1])):
+            inside = xmin <= x <= xmax and ymin <= y <= ymax
+            col = min(max(math.floor((x - ox) / cell_m), 0), cols - 1)
+            row = min(max(math.floor((y - oy) / cell_m), 0), rows - 1)
+            if not inside or blocked[row, col]:
+                out[i] = False

@@ -120,6 +120,71 @@ def test_segment_cost_is_the_exact_integral(robot):
         assert fast(a[0], a[1], b[0], b[1]) == pytest.approx(e, rel=1e-12, abs=1e-12)
 
 
+def _numpy_traverse(cm, p0, p1):
+    """The vectorized numpy `_walk_segments` replaced, kept as its reference: every cell each
+    segment crosses, with the length inside it, as (segment, row, col, length) pieces."""
+    p0 = np.asarray(p0, dtype=np.float64).reshape(-1, 2)
+    p1 = np.asarray(p1, dtype=np.float64).reshape(-1, 2)
+    n = len(p0)
+    g0 = (p0 - cm.origin_m) / cm.cell_m
+    g1 = (p1 - cm.origin_m) / cm.cell_m
+    d = g1 - g0
+    lo = np.floor(np.minimum(g0, g1)).astype(np.int64)
+    hi = np.ceil(np.maximum(g0, g1)).astype(np.int64)
+    counts = np.maximum(hi - lo - 1, 0)
+    pieces = [np.arange(n, dtype=np.int64), np.arange(n, dtype=np.int64)]
+    params = [np.zeros(n), np.ones(n)]
+    for axis in (0, 1):
+        c = counts[:, axis]
+        total = int(c.sum())
+        if not total:
+            continue
+        seg = np.repeat(np.arange(n, dtype=np.int64), c)
+        first = np.repeat(np.cumsum(c) - c, c)
+        line = np.repeat(lo[:, axis] + 1, c) + (np.arange(total) - first)
+        pieces.append(seg)
+        params.append((line - g0[seg, axis]) / d[seg, axis])
+    seg = np.concatenate(pieces)
+    t = np.clip(np.concatenate(params), 0.0, 1.0)
+    order = np.lexsort((t, seg))
+    seg, t = seg[order], t[order]
+    same = seg[1:] == seg[:-1]
+    s, ta, tb = seg[:-1][same], t[:-1][same], t[1:][same]
+    mid = 0.5 * (ta + tb)
+    xy = g0[s] + mid[:, None] * d[s]
+    col = np.clip(np.floor(xy[:, 0]).astype(np.intp), 0, cm.shape[1] - 1)
+    row = np.clip(np.floor(xy[:, 1]).astype(np.intp), 0, cm.shape[0] - 1)
+    return s, row, col, (tb - ta) * np.hypot(d[s, 0], d[s, 1]) * cm.cell_m
+
+
+def test_segment_walks_are_the_numpy_pieces_float_for_float(wall_costmap):
+    """`segments_cost` and `segments_free` (one compiled pass) give exactly what the vectorized
+    numpy pieces give: the cost float for float (the planner's objective and the sim's routes
+    depend on it), on short and map-long segments, axis-aligned ones, ones through cell corners,
+    zero-length ones and ones leaving the map."""
+    cm = wall_costmap
+    rng = np.random.default_rng(11)
+    xmin, ymin, xmax, ymax = cm.bounds_m
+    p0 = rng.uniform((xmin - 2, ymin - 2), (xmax + 2, ymax + 2), size=(400, 2))
+    p1 = p0 + rng.normal(0.0, 4.0, size=(400, 2)) * rng.choice([0.1, 1.0, 10.0], size=(400, 1))
+    p1[:20, 1] = p0[:20, 1]  # along x
+    p1[20:40, 0] = p0[20:40, 0]  # along y
+    p1[40:50] = p0[40:50]  # no length
+    corners = cm.origin_m + cm.cell_m * rng.integers(0, 10, size=(20, 2)).astype(float)
+    p0[50:70], p1[50:70] = corners, corners + cm.cell_m * np.array([3.0, 2.0])  # through corners
+    s, row, col, length = _numpy_traverse(cm, p0, p1)
+    pieces = np.zeros(len(length))
+    np.multiply(length, cm.cost_per_m[row, col], out=pieces, where=length > 0)
+    cost = np.bincount(s, weights=pieces, minlength=len(p0))
+    crossed = np.bincount(s, weights=cm.blocked[row, col] & (length > 0), minlength=len(p0)) > 0
+    free = ~crossed & cm.is_free(p0[:, 0], p0[:, 1]) & cm.is_free(p1[:, 0], p1[:, 1])
+    assert np.array_equal(cm.segments_cost(p0, p1), cost)
+    assert np.array_equal(cm.segments_free(p0, p1), free)
+    assert 50 < free.sum() < 350 and np.isinf(cost).sum() < len(cost)  # both answers, many times
+    nowhere = np.array([[np.nan, 1.0], [2.0, np.inf]])  # an end off every grid: no walk, not free
+    assert not cm.segments_free(nowhere, p0[:2]).any() and np.isnan(cm.segments_cost(nowhere, p0[:2])).all()
+
+
 def test_point_problems_are_one_clear_line(wall_costmap):
     cm = wall_costmap
     cases = {
