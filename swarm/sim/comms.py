@@ -60,6 +60,7 @@ import functools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 import scipy.sparse
@@ -267,6 +268,8 @@ class RadioNet:
         # per-pair state, sorted by key i * N + j (i < j)
         self._keys = np.empty(0, dtype=np.int64)
         self._shadow_db = np.empty(0)
+        # (the state of the last `update_nets` call that held this net's, its index there)
+        self._batch: tuple[_BatchState, int] | None = None
         self._all_pairs: tuple[np.ndarray, np.ndarray] | None = None  # (live robots, their pair keys)
         self._last_xy = np.full((self.n_nodes, 2), np.nan)
         self._last_xy[self.n :] = fixed
@@ -281,6 +284,7 @@ class RadioNet:
 
     def reset(self) -> None:
         """Forget all shadowing state (a new episode)."""
+        self._batch = None
         self._keys = np.empty(0, dtype=np.int64)
         self._shadow_db = np.empty(0)
         self._last_xy[: self.n] = np.nan
@@ -450,8 +454,9 @@ def update_nets(
     on[:, :n] &= up
 
     keys = net._candidate_keys(pos, finite)  # b * N^2 + i * N + j
-    old, prev = _previous_shadowing(nets, keys)
-    last = np.stack([m._last_xy for m in nets])
+    together = _updated_together(nets)
+    old, prev = _previous_shadowing(nets, keys, together)
+    last = together.last_xy.copy() if together is not None else np.stack([m._last_xy for m in nets])
     with np.errstate(invalid="ignore"):
         step = np.sqrt(np.sum((pos - last) ** 2, axis=2)).ravel()
     step[~np.isfinite(step)] = np.inf
@@ -468,16 +473,44 @@ def update_nets(
     ends = np.searchsorted(keys, np.arange(1, k) * (big_n * big_n)).tolist()
     local = keys - run * (big_n * big_n)
     last[finite] = pos[finite]
-    for m, lo, hi, last_b in zip(nets, [0, *ends], [*ends, len(keys)], last, strict=True):
+    batch = _BatchState(keys, shadow, last)
+    for b, (m, lo, hi, last_b) in enumerate(zip(nets, [0, *ends], [*ends, len(keys)], last, strict=True)):
         m._keys, m._shadow_db, m._last_xy = local[lo:hi], shadow[lo:hi], last_b
+        m._batch = (batch, b)
     return _links(net, k, node_i[works], node_j[works], margin[works])
 
 
-def _previous_shadowing(nets: Sequence[RadioNet], keys: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+class _BatchState(NamedTuple):
+    """The pair state of the nets of one `update_nets` call, whole: each net holds its slices."""
+
+    keys: np.ndarray  # batch keys b * N^2 + i * N + j
+    shadow_db: np.ndarray
+    last_xy: np.ndarray  # (k, N, 2)
+
+
+def _updated_together(nets: Sequence[RadioNet]) -> _BatchState | None:
+    """The state of the last `update_nets` call when it was these nets', in this order, and none
+    has been reset since (the usual step of a batch): their state whole, without gathering it."""
+    first = nets[0]._batch
+    if first is None or first[1] != 0 or len(first[0].last_xy) != len(nets):
+        return None
+    batch = first[0]
+    for b, m in enumerate(nets):
+        mine = m._batch
+        if mine is None or mine[0] is not batch or mine[1] != b:
+            return None
+    return batch
+
+
+def _previous_shadowing(
+    nets: Sequence[RadioNet], keys: np.ndarray, together: _BatchState | None = None
+) -> tuple[np.ndarray, np.ndarray]:
     """Which of the pairs `keys` (batch keys) each net already had, and their shadowing then (0
-    for new pairs)."""
+    for new pairs). `together`: the nets' state whole (`_updated_together`)."""
     big_n = nets[0].n_nodes
-    if len(nets) == 1:
+    if together is not None:
+        old_keys, old_shadow = together.keys, together.shadow_db
+    elif len(nets) == 1:
         old_keys, old_shadow = nets[0]._keys, nets[0]._shadow_db
     else:
         nn = big_n * big_n

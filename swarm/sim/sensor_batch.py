@@ -171,8 +171,8 @@ class SensorBatch:
                 )
         # the last positions of every run stepped (the updates above set their own the same way)
         if len(runs) == self.runs:
-            last_xy[~sensing] = np.nan
-            last_xy[who] = xy[who]
+            last_xy.fill(np.nan)
+            np.copyto(last_xy, xy, where=sensing[:, None])
             return out
         rows = np.repeat(stepped, n)
         last_xy[rows & ~sensing] = np.nan

@@ -429,6 +429,34 @@ def test_a_batch_of_nets_gives_each_run_the_links_it_gets_alone(n_robots: int) -
             np.testing.assert_array_equal(batch[b].component, labels)
 
 
+def test_nets_updated_in_changing_groups_and_reset_between_give_what_they_give_alone() -> None:
+    """The state a group of nets carries from one `update_nets` call to the next is taken whole
+    only when the very same nets, in the same order, come again unreset: groups that change, come
+    in another order or hold a net reset since give every net what it gets alone."""
+    rng = np.random.default_rng(5)
+    r0 = _r0(RADIO)
+    fixed = np.array([[0.0, 0.0], [2 * r0, 0.0]])
+    k, n = 4, 12
+    alone = [RadioNet(RADIO, n, fixed) for _ in range(k)]
+    grouped = [RadioNet(RADIO, n, fixed) for _ in range(k)]
+    rngs_alone = [np.random.default_rng(s) for s in range(k)]
+    rngs_grouped = [np.random.default_rng(s) for s in range(k)]
+    xy = rng.uniform(0, 2 * r0, size=(k, n, 2))
+    groups = [[0, 1, 2, 3], [0, 1, 2, 3], [2, 0], [0, 1, 2, 3], [1, 3], [1, 3], [3, 1], [0, 1, 2, 3]]
+    for step, group in enumerate(groups):
+        xy += rng.normal(0.0, 3.0, size=xy.shape)
+        up = rng.random((k, n)) < 0.9
+        if step == 5:  # a new episode for one net of the group
+            alone[3].reset()
+            grouped[3].reset()
+        one = [alone[b].update(xy[b], up[b], rngs_alone[b]) for b in group]
+        nets, rngs = [grouped[b] for b in group], [rngs_grouped[b] for b in group]
+        batch = update_nets(nets, xy[group], up[group], rngs)
+        for b, a, g in zip(group, one, batch, strict=True):
+            _assert_same_links(a, g)
+            assert rngs_alone[b].bit_generator.state == rngs_grouped[b].bit_generator.state
+
+
 def test_nets_of_different_configurations_are_not_updated_together() -> None:
     nets = [RadioNet(RADIO, 3), RadioNet(QUIET, 3)]
     with pytest.raises(ValueError):
