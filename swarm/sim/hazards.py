@@ -482,21 +482,16 @@ class HazardModel:
             # cum[:, -1] rather than total: the pick stays < 4 whatever the rounding
             which[cont] = (cum <= u[cont, _U_WHICH][:, None] * cum[:, -1:]).sum(axis=1)
 
-        # lowest priority first, so higher ones overwrite
-        if self._isolation_s is not None:
-            cause[on_map & (inp.isolated_s >= self._isolation_s)] = _CAUSE["cut_off"]
-        cause[alive & (inp.surf_time_s > self._surf_limit_s)] = _CAUSE["surf_timeout"]
-        cause[alive & inp.at_sea & (inp.sea_time_s > self._sea_limit_s)] = _CAUSE["sea_timeout"]
-        cause[alive & (inp.energy_wh <= 0.0)] = _CAUSE["battery"]
-        cause[stuck] = _CAUSE["immobilized"]
-        cause[cont] = _RATE_CAUSE_INDEX[which[cont]]
-        collided = (new_boulder & (u[:, _U_BOULDER] < self._p_collision)) | hidden
-        cause[collided] = _CAUSE["rock"]
-        cause[alive & inp.wave_hits & (u[:, _U_WAVE] < self.wave_damage_probability(inp))] = _CAUSE[
-            "wave_impact"
-        ]
-        cause[mine >= 0] = _CAUSE["mine"]
-        dropped = cont & (which == _DROPOUT_COLUMN) & (cause == _CAUSE["cut_off"])
+        # lowest priority first, so higher ones overwrite (`_causes`, one pass)
+        p_wave = np.broadcast_to(np.asarray(self.wave_damage_probability(inp), np.float64), (size,))
+        dropped = np.empty(size, bool)
+        _causes(
+            on_map, alive, inp.at_sea, inp.isolated_s, self._isolation_s is not None,
+            math.inf if self._isolation_s is None else float(self._isolation_s),
+            inp.surf_time_s, float(self._surf_limit_s), inp.sea_time_s, float(self._sea_limit_s),
+            inp.energy_wh, stuck, cont, which, new_boulder, u, float(self._p_collision), hidden,
+            inp.wave_hits, p_wave, mine, _RATE_CAUSE_INDEX, cause, dropped,
+        )  # fmt: skip
         return Losses(cause=cause, mine=mine, radio_dropped=dropped)
 
     # --- the rules with state ------------------------------------------------------------------
@@ -633,3 +628,42 @@ def hidden_rocks_in_cells(
     count = int(rng.poisson(per_ha * len(centers) * cell_m * cell_m / 1e4))
     cells = centers[rng.integers(0, len(centers), size=count)]
     return cells + rng.uniform(-cell_m / 2, cell_m / 2, size=(count, 2))
+
+
+_CUT_OFF, _SURF_TIMEOUT, _SEA_TIMEOUT = _CAUSE["cut_off"], _CAUSE["surf_timeout"], _CAUSE["sea_timeout"]
+_BATTERY, _IMMOBILIZED, _ROCK = _CAUSE["battery"], _CAUSE["immobilized"], _CAUSE["rock"]
+_WAVE_IMPACT, _MINE = _CAUSE["wave_impact"], _CAUSE["mine"]
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _causes(
+    on_map, alive, at_sea, isolated_s, isolating, isolation_s, surf_time_s, surf_limit_s, sea_time_s,
+    sea_limit_s, energy_wh, stuck, cont, which, new_boulder, u, p_collision, hidden, wave_hits, p_wave,
+    mine, rate_cause, cause, dropped,
+):  # fmt: skip
+    """`HazardModel.step`'s cause of each robot's loss, robot by robot, lowest priority first so
+    higher ones overwrite: cut off, surf and sea timeouts, battery, immobilized, a continuous
+    hazard (`rate_cause[which]`), rock, wave impact, mine. `dropped`: a radio dropout that cut
+    the robot off."""
+    for i in range(cause.shape[0]):
+        c = cause[i]
+        if isolating and on_map[i] and isolated_s[i] >= isolation_s:
+            c = _CUT_OFF
+        if alive[i] and surf_time_s[i] > surf_limit_s:
+            c = _SURF_TIMEOUT
+        if alive[i] and at_sea[i] and sea_time_s[i] > sea_limit_s:
+            c = _SEA_TIMEOUT
+        if alive[i] and energy_wh[i] <= 0.0:
+            c = _BATTERY
+        if stuck[i]:
+            c = _IMMOBILIZED
+        if cont[i]:
+            c = rate_cause[which[i]]
+        if (new_boulder[i] and u[i, _U_BOULDER] < p_collision) or hidden[i]:
+            c = _ROCK
+        if alive[i] and wave_hits[i] and u[i, _U_WAVE] < p_wave[i]:
+            c = _WAVE_IMPACT
+        if mine[i] >= 0:
+            c = _MINE
+        cause[i] = c
+        dropped[i] = cont[i] and which[i] == _DROPOUT_COLUMN and c == _CUT_OFF

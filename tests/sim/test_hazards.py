@@ -25,8 +25,13 @@ from swarm.mission.schema import (
 )
 from swarm.robot.terrain import default_library
 from swarm.sim.hazards import (
+    _DROPOUT_COLUMN,
+    _RATE_CAUSE_INDEX,
+    _U_BOULDER,
+    _U_WAVE,
     CAUSE_DESCRIPTIONS,
     CAUSES,
+    N_UNIFORMS,
     NO_LOSS,
     RATE_CAUSES,
     ROCK_CONTACT_M,
@@ -34,6 +39,7 @@ from swarm.sim.hazards import (
     HazardInputs,
     HazardModel,
     Losses,
+    _causes,
     hidden_rocks,
     hidden_rocks_in_cells,
 )
@@ -703,3 +709,43 @@ def test_a_batch_sees_its_fields_flags_as_their_owners_write_them_across_resets(
     losses = model.step(on_mine, rngs, [0, 1])
     np.testing.assert_array_equal(losses.mine, [0, -1])
     assert a.exploded[0] and not c.exploded.any()
+
+
+@pytest.mark.parametrize("isolating", [False, True])
+def test_the_causes_pass_is_the_numpy_priority_rules(isolating: bool) -> None:
+    """`_causes` (one compiled pass) gives every robot the cause the priority rules written as
+    numpy masks give (lowest first, higher ones overwriting), and the same radio dropouts, on
+    random robots where every rule fires and many overlap."""
+    rng = np.random.default_rng(7)
+    size = 4000
+    on_map, alive, at_sea = (rng.random(size) < p for p in (0.7, 0.8, 0.3))
+    isolated_s, surf_time_s, sea_time_s = (rng.uniform(0, 100, size) for _ in range(3))
+    energy_wh = rng.uniform(-1, 5, size)
+    stuck, cont, new_boulder, hidden, wave_hits = (rng.random(size) < p for p in (0.1, 0.1, 0.2, 0.05, 0.2))
+    which = rng.integers(0, 4, size).astype(np.intp)
+    u = rng.random((size, N_UNIFORMS))
+    p_wave = rng.random(size)
+    mine = np.where(rng.random(size) < 0.05, rng.integers(0, 9, size), -1).astype(np.int64)
+    limits = {"isolation": 50.0, "surf": 60.0, "sea": 70.0, "collision": 0.4}
+
+    cause = np.full(size, NO_LOSS, dtype=np.int64)
+    if isolating:
+        cause[on_map & (isolated_s >= limits["isolation"])] = CAUSES.index("cut_off")
+    cause[alive & (surf_time_s > limits["surf"])] = CAUSES.index("surf_timeout")
+    cause[alive & at_sea & (sea_time_s > limits["sea"])] = CAUSES.index("sea_timeout")
+    cause[alive & (energy_wh <= 0.0)] = CAUSES.index("battery")
+    cause[stuck] = CAUSES.index("immobilized")
+    cause[cont] = _RATE_CAUSE_INDEX[which[cont]]
+    cause[(new_boulder & (u[:, _U_BOULDER] < limits["collision"])) | hidden] = CAUSES.index("rock")
+    cause[alive & wave_hits & (u[:, _U_WAVE] < p_wave)] = CAUSES.index("wave_impact")
+    cause[mine >= 0] = CAUSES.index("mine")
+    dropped = cont & (which == _DROPOUT_COLUMN) & (cause == CAUSES.index("cut_off"))
+
+    got, got_dropped = np.full(size, NO_LOSS, dtype=np.int64), np.empty(size, bool)
+    _causes(
+        on_map, alive, at_sea, isolated_s, isolating, limits["isolation"], surf_time_s, limits["surf"],
+        sea_time_s, limits["sea"], energy_wh, stuck, cont, which, new_boulder, u, limits["collision"],
+        hidden, wave_hits, p_wave, mine, _RATE_CAUSE_INDEX, got, got_dropped,
+    )  # fmt: skip
+    assert np.array_equal(got, cause) and np.array_equal(got_dropped, dropped)
+    assert len(np.unique(cause)) >= 9 and dropped.any()
