@@ -40,7 +40,7 @@ from numba.typed import List
 from scipy.spatial import cKDTree
 
 from swarm.errors import SwarmError
-from swarm.sim import comms, hazards, sensing
+from swarm.sim import comms, draws, hazards, sensing
 from swarm.sim.control import drive_toward
 from swarm.sim.criteria import MissionScore
 from swarm.sim.mines import lay_mines
@@ -522,14 +522,15 @@ class World:
             return
         surf = self.setup.mission.hazards.surf
         enabled = self.setup.mission.hazards.enabled
-        for b in runs.tolist():
-            run = self.runs[b]
-            p = surf.flip_probability * np.minimum(1.0, height_m[b] / max(surf.wave_height_m, 1e-9))
-            draws = run.rngs["waves"].random(self.n)
-            flips = hits[b] & (draws < p) & enabled
-            self.inverted[b] ^= flips
-            for i in np.flatnonzero(flips).tolist():
-                run.log_event("flip", i, inverted=bool(self.inverted[b, i]))
+        n = self.n
+        u = np.empty((len(runs), n))  # each run's n draws from its own wave stream, run after run
+        draws.fill_uniform(self.stream_typed("waves"), runs, np.arange(len(runs) + 1) * n, u.reshape(-1))
+        p = surf.flip_probability * np.minimum(1.0, height_m[runs] / max(surf.wave_height_m, 1e-9))
+        flips = hits[runs] & (u < p) & enabled
+        self.inverted[runs] ^= flips
+        for k, i in zip(*np.nonzero(flips), strict=True):
+            b = int(runs[k])
+            self.runs[b].log_event("flip", int(i), inverted=bool(self.inverted[b, i]))
 
     def _sense(self, live: list[int]) -> None:
         if self.setup.search_task is None:
