@@ -48,6 +48,7 @@ from swarm.mission.schema import Mission
 from swarm.planning.allocation import auction
 from swarm.sim.criteria import STATION_RADIUS_M
 from swarm.sim.layout import ROLES
+from swarm.sim.routes import pairwise_sum
 from swarm.sim.runview import FOLLOW, LOITER, MARK, RETURN, RETURNING, SEA, RunView
 from swarm.sim.standoff import SafeGround
 
@@ -576,7 +577,7 @@ class ScriptedPolicy:
         left = c.at_s - env.t_s
         if self._clearance_state == "before" and left > self._watch_s:
             return  # too early for either check below
-        if self._clearance_state == "before" and left <= HOLD_HORIZON_S:
+        if self._clearance_state == "before" and left <= HOLD_HORIZON_S and len(self._late_markers(left)):
             self._drop_late_markers(left)  # the allocation parks them clear
         if self._clearance_state == "before" and self._hold_due():
             self._clearance_state = "holding"
@@ -676,6 +677,20 @@ class ScriptedPolicy:
             env.set_command(i, LOITER)  # drops the mark
         return marked
 
+    def _late_markers(self, time_left_s: float) -> np.ndarray:
+        """The markers on their way (`_markers_on_the_way`) that can no longer reach their mine in
+        `time_left_s` (`_arrivals_s`), in index order: one compiled pass in the same arithmetic
+        (the clearance asks at every step of its watch, and almost always nobody is late)."""
+        env = self.env
+        routes = env.routes
+        late = np.empty(env.n, np.intp)
+        count = _late_markers(
+            env.alive, env.on_map, env.marking, env.object_marker, env.robot_state, env.objects_m,
+            routes.points, routes.cursor, routes.end, RETREAT_TIME_FACTOR,
+            float(env.limits.cruise_speed_mps), RETREAT_ALLOWANCE_S, float(time_left_s), late,
+        )  # fmt: skip
+        return late[:count]
+
     def _markers_on_the_way(self) -> np.ndarray:
         """The robots marking a mine that are not on it yet, in index order."""
         env = self.env
@@ -687,8 +702,7 @@ class ScriptedPolicy:
         the mark up as soon as it can no longer make it, and gets clear like everyone else (before
         the hold, `_clearance` drops it and the allocation parks it clear)."""
         env = self.env
-        on_the_way = self._markers_on_the_way()
-        late = on_the_way[self._arrivals_s(on_the_way) >= time_left_s].tolist()
+        late = self._late_markers(time_left_s).tolist()
         if not late:
             return
         objs = env.objects_m[self._drop_late_markers(time_left_s)]
@@ -796,3 +810,40 @@ def _idle_robots(alive, on_map, role, command, cursor, end, marking, phase):
             and phase[i] >= SEA
         )
     return out
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _late_markers(
+    alive, on_map, marking, object_marker, state, objects_m, points, cursor, end, factor, cruise_mps,
+    allowance_s, time_left_s, late,
+):  # fmt: skip
+    """`ScriptedPolicy._late_markers` robot by robot, writing the late ones' indices to `late`
+    and returning how many: a marker on its way (alive, ashore, its object not marked by it) whose
+    route's rest (numpy's sum, `pairwise_sum`), at least the straight line to its object, takes
+    `factor * length / cruise_mps + allowance_s` or longer."""
+    count = 0
+    legs = np.empty(0)
+    for i in range(alive.shape[0]):
+        k = marking[i]
+        if not (alive[i] and on_map[i] and k >= 0) or object_marker[k] == i:
+            continue
+        x, y = state[i, 0], state[i, 1]
+        c, e = cursor[i], end[i]
+        m = max(e - c, 0)
+        if m > legs.shape[0]:
+            legs = np.empty(2 * m)
+        if m:
+            legs[0] = np.hypot(points[c, 0] - x, points[c, 1] - y)
+            for j in range(1, m):
+                a, b = c + j - 1, c + j
+                legs[j] = np.hypot(points[b, 0] - points[a, 0], points[b, 1] - points[a, 1])
+        rest = 0.0 + pairwise_sum(legs, 0, m)
+        straight = np.hypot(objects_m[k, 0] - x, objects_m[k, 1] - y)
+        if math.isnan(rest) or math.isnan(straight):
+            length = math.nan
+        else:
+            length = rest if rest >= straight else straight  # np.maximum's pick
+        if factor * length / cruise_mps + allowance_s >= time_left_s:
+            late[count] = i
+            count += 1
+    return count

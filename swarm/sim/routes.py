@@ -114,7 +114,7 @@ class Routes:
     def remaining_m(self, robots: np.ndarray, xy: np.ndarray) -> np.ndarray:
         """(k,) how far each of `robots` (standing at `xy` (k, 2)) has still to drive along its
         route: from where it stands through the waypoints it still has to visit. Each the sum
-        numpy's `np.hypot(legs[:, 0], legs[:, 1]).sum()` gives, float for float (`_pairwise_sum`),
+        numpy's `np.hypot(legs[:, 0], legs[:, 1]).sum()` gives, float for float (`pairwise_sum`),
         in one compiled pass over the robots."""
         robots = np.asarray(robots, dtype=np.intp)
         out = np.empty(len(robots))
@@ -346,11 +346,11 @@ def _remaining_m(points, cursor, end, robots, xy, out):
             for j in range(1, m):
                 a, b = c + j - 1, c + j
                 legs[j] = np.hypot(points[b, 0] - points[a, 0], points[b, 1] - points[a, 1])
-        out[k] = 0.0 + _pairwise_sum(legs, 0, m)
+        out[k] = 0.0 + pairwise_sum(legs, 0, m)
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _pairwise_sum(a, lo, n):
+def pairwise_sum(a, lo, n):
     """The sum of a[lo:lo + n] in numpy's order (`pairwise_sum` of its add reduction: blocks of up
     to 128 summed by `_block_sum`, halved above that), so a compiled pass adds up to the same
     float. The halving walks an explicit stack: numba's cache cannot hold a recursive function."""

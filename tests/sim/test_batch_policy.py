@@ -116,3 +116,30 @@ def test_a_batch_with_batteries_at_their_reserve_is_the_same_as_its_runs_alone(t
         reserves += sum(ev["kind"] == "battery_reserve" for ev in log.events)
     assert reserves >= len(SEEDS)
     assert np.isfinite(logs[0].times_s).all()
+
+
+def test_late_markers_are_the_markers_whose_arrival_is_too_late(tmp_path) -> None:
+    """`_late_markers` (one compiled pass, asked at every step of the clearance's watch) picks the
+    markers on their way whose `_arrivals_s` is at least the time left, at every step of a busy
+    run and for times left that split them: late and on time both, many times."""
+    from swarm.sim.policy import BatchPolicy
+
+    mission, plan = _mission(tmp_path, HAZARDS)
+    world = World(MissionSetup(mission, plan, dt_s=0.5, substep_s=0.25), len(SEEDS))
+    world.reset(SEEDS)
+    batch = BatchPolicy(world.runs)
+    late = on_time = 0
+    while world.in_agents.any():
+        batch.update(np.flatnonzero(world.in_agents.any(axis=1)).tolist())
+        for policy in batch.policies:
+            who = policy._markers_on_the_way()
+            arrivals = policy._arrivals_s(who)
+            for left in (*arrivals, *(arrivals + 1e-9), 0.0, np.inf):
+                expected = who[arrivals >= left]
+                assert np.array_equal(policy._late_markers(float(left)), expected)
+                late += len(expected)
+                on_time += len(who) - len(expected)
+        wheels, jet = world.controller_commands()
+        ended, up, _ = world.advance(wheels, jet)
+        world.finish(ended, up)
+    assert late > 100 and on_time > 100, (late, on_time)

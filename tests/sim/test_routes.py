@@ -12,7 +12,7 @@ from swarm.sim.routes import (
     LOOKAHEAD_M,
     PASS_CROSS_TRACK_M,
     Routes,
-    _pairwise_sum,
+    pairwise_sum,
 )
 
 
@@ -184,5 +184,5 @@ def test_the_length_left_is_numpys_sum_of_the_legs_float_for_float() -> None:
         assert got[k] == float(np.hypot(legs[:, 0], legs[:, 1]).sum())
     for n in [*range(300), 1000, 1031, 5000, 70_001]:
         a = rng.uniform(0.0, 10.0, size=n) * 10.0 ** rng.uniform(-3, 3)
-        assert 0.0 + _pairwise_sum(a, 0, n) == a.sum()
+        assert 0.0 + pairwise_sum(a, 0, n) == a.sum()
     assert len(routes.remaining_m(np.empty(0, np.intp), np.empty((0, 2)))) == 0
