@@ -619,11 +619,8 @@ class ScriptedPolicy:
         if not len(near):
             return False
         starts = env.router.snap_many(env.robot_state[near, :2])
-        far = self._safe_ground(objs, safe_m).distance_m(starts)
-        far = far[np.isfinite(far)]
-        if not len(far):
-            return False
-        return self._retreat_s(float(far.max())) >= left
+        far = self._safe_ground(objs, safe_m).farthest_m(starts)
+        return far >= 0.0 and self._retreat_s(far) >= left
 
     def _retreat_s(self, distance_m: float | np.ndarray) -> float | np.ndarray:
         """The time allowed to retreat `distance_m` over free ground (at cruise speed, with the

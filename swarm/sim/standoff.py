@@ -122,6 +122,13 @@ class SafeGround:
         reached; 0 on safe ground)."""
         return self.dist[self._node(np.asarray(xy, dtype=np.float64).reshape(-1, 2))]
 
+    def farthest_m(self, xy: np.ndarray) -> float:
+        """The largest finite `distance_m` of the points `xy` (k, 2), -inf if none is finite: how
+        far the farthest of them has to go (one compiled pass, `cell_of`'s arithmetic)."""
+        xy = np.ascontiguousarray(xy, dtype=np.float64).reshape(-1, 2)
+        x0, y0 = (float(v) for v in self.cm.origin_m)
+        return _farthest(xy, self.dist, x0, y0, float(self.cm.cell_m), *self.cm.shape)
+
     def path(self, xy: np.ndarray) -> np.ndarray:
         """Waypoints (k, 2) from the free point `xy` along cell centres to the nearest safe cell;
         just `xy` where it is safe already or no safe ground can be reached from it."""
@@ -245,3 +252,16 @@ def _step_lengths(cell_m):
     length[:4] = cell_m
     length[4:] = cell_m * math.sqrt(2.0)
     return length
+
+
+@numba.njit(cache=True)
+def _farthest(xy, dist, x0, y0, cell_m, rows, cols):
+    """`SafeGround.farthest_m`: the largest finite distance of the points' cells (-inf if none)."""
+    out = -np.inf
+    for k in range(xy.shape[0]):
+        col = min(max(math.floor((xy[k, 0] - x0) / cell_m), 0), cols - 1)
+        row = min(max(math.floor((xy[k, 1] - y0) / cell_m), 0), rows - 1)
+        d = dist[row * cols + col]
+        if d < np.inf and d > out:
+            out = d
+    return out

@@ -79,6 +79,22 @@ def test_reach_bounds_every_distance_to_safe_ground(costmap) -> None:
     assert nowhere.reach_m == -np.inf
 
 
+def test_the_farthest_distance_is_the_largest_finite_distance_m(costmap) -> None:
+    """`farthest_m` (one compiled pass) is the largest finite `distance_m` of the points, on
+    random points over and beyond the map (cut-off cells among them), and -inf with none finite."""
+    cm = costmap
+    mines = np.array([[238.1, 113.2], [237.9, 98.0], [297.4, 106.6]])
+    ground = SafeGround(cm, mines, 60.0)
+    rng = np.random.default_rng(2)
+    xmin, ymin, xmax, ymax = cm.bounds_m
+    for k in (1, 3, 40, 400):
+        xy = rng.uniform((xmin - 5, ymin - 5), (xmax + 5, ymax + 5), size=(k, 2))
+        d = ground.distance_m(xy)
+        finite = d[np.isfinite(d)]
+        assert ground.farthest_m(xy) == (finite.max() if len(finite) else -np.inf)
+    assert SafeGround(cm, mines, 1e6).farthest_m(xy) == -np.inf
+
+
 def test_near_any_is_a_kd_tree_query_of_every_cell(costmap) -> None:
     """The windowed mask is exactly `distance < radius` from a k-d tree of the points, at every
     cell, with points near and beyond the map's edges and radii from under a cell to most of it."""
