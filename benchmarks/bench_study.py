@@ -4,8 +4,8 @@ per second one run at a time against its runs in batches on the batched simulato
 
     python benchmarks/bench_study.py [--mission missions/mine_clear.yaml] [--runs 8] [--seed 0]
                                      [--backends local ray] [--quiet-wait 60]
-    python benchmarks/bench_study.py --batched [--runs 32] [--batch B] [--repeat 2] [--today-ref REF]
-                                     [--table-ref REF]
+    python benchmarks/bench_study.py --batched [--runs 64] [--today-runs 8] [--batch B] [--repeat 2]
+                                     [--today-ref REF] [--table-ref REF]
 
 Batched (issue 13's target: at least 20 times today's runs/s on one worker, the same table): the
 same study on one local worker, today's way and batched, alternately `--repeat` times (the machine
@@ -18,6 +18,13 @@ write every file; the rate is runs / wall time of the `run_study` call, the rati
 Check: the two results tables are identical apart from runtime_s (with `--table-ref REF`, batched's
 against the code of commit REF's instead: a behaviour change made after today's commit on purpose,
 such as issue 12's fix 84e3d4d, changes a run's row without being a speed-up's doing).
+
+Study size: a study's runs go in batches of up to 64, so its rate depends on how many runs it has
+(16: about 1.6 runs/s here, 64: about 2.2), while today's way, each run alone, has the same rate
+at any size. `--today-runs N` times today's way on the study's first N runs only (the same runs:
+a run's seed depends on its number, not on the study's size) and compares their rows with the
+batched table's first N: `--runs 64 --today-runs 8` measures a 64-run study in about 5 minutes,
+where today's way would take 11 on all 64.
 
 The study: the mission as written (no sweeps: one parameter point), `--runs` runs, seed `--seed`.
 The default mission is the shipped `missions/mine_clear.yaml` (24 robots, about 10-15 s per run
@@ -77,6 +84,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import pyarrow as pa
+import pyarrow.compute as pc
 import pyarrow.parquet as pq
 
 import swarm.sim.run  # noqa: F401  (imported here so the in-process 1-worker run does not time imports)
@@ -294,6 +302,11 @@ def batched_main(args: argparse.Namespace) -> None:
         f"python {platform.python_version()}, {os.cpu_count()} cpus; mission {shown}; {args.runs} runs, "
         f"seed {args.seed}, one local worker; today: {today_name}; batched: {batch_name}"
     )
+    today_runs = min(args.today_runs or args.runs, args.runs)
+    today_spec = StudySpec(str(mission), runs=today_runs, seed=args.seed)
+    if today_runs < args.runs:
+        print(f"today's way on the study's first {today_runs} runs (the same runs as the batched study's)")
+    runs_of = {"today": today_runs, "batched": args.runs}
     with tempfile.TemporaryDirectory(prefix="bench_study-batched-") as tmp:
         tmp_path = Path(tmp)
         src = tmp_path / "today-src"
@@ -309,28 +322,29 @@ def batched_main(args: argparse.Namespace) -> None:
                     if which == "batched":
                         wall, table = measure_batched(spec, args.batch, out)
                     elif args.today_ref:
-                        wall, table = measure_today(spec, args.today_ref, src, out)
+                        wall, table = measure_today(today_spec, args.today_ref, src, out)
                     else:
-                        wall, table = measure_batched(spec, 1, out)
+                        wall, table = measure_batched(today_spec, 1, out)
                 tables.setdefault(which, table)
                 rows.append((which, k, wall, cpu.others))
+                n = runs_of[which]
                 print(
-                    f"  {which:<7} #{k + 1}: {args.runs} runs in {wall:7.1f} s = "
-                    f"{args.runs / wall:.3f} runs/s (others used {cpu.others / wall:.0%} of a core "
+                    f"  {which:<7} #{k + 1}: {n} runs in {wall:7.1f} s = "
+                    f"{n / wall:.3f} runs/s (others used {cpu.others / wall:.0%} of a core "
                     f"meanwhile; waited {waited:.0f} s)",
                     flush=True,
                 )
         if args.table_ref:
             _unpack(args.table_ref, tmp_path / "table-src")
             _, tables["reference"] = measure_today(
-                spec, args.table_ref, tmp_path / "table-src", tmp_path / "reference"
+                today_spec, args.table_ref, tmp_path / "table-src", tmp_path / "reference"
             )
     print()
     best = {
-        w: max(args.runs / wall for which, _, wall, _ in rows if which == w) for w in ("today", "batched")
+        w: max(runs_of[w] / wall for which, _, wall, _ in rows if which == w) for w in ("today", "batched")
     }
     mean = {
-        w: args.runs / (sum(wall for which, _, wall, _ in rows if which == w) / args.repeat)
+        w: runs_of[w] / (sum(wall for which, _, wall, _ in rows if which == w) / args.repeat)
         for w in ("today", "batched")
     }
     print(f"{'':<8} {'runs/s (best)':>13} {'runs/s (mean)':>13}")
@@ -342,9 +356,12 @@ def batched_main(args: argparse.Namespace) -> None:
     print(f"{verdict}  batched {ratio:.1f}x today's runs/s on one worker (target >= {TARGET_BATCHED:g}x)")
     against = f"git {args.table_ref}" if args.table_ref else "today"
     reference = tables["reference" if args.table_ref else "today"]
-    diff = _differences(reference, tables["batched"])
+    batched = tables["batched"]
+    if today_runs < args.runs:  # the runs both made
+        batched = batched.filter(pc.less(batched.column("run"), today_runs))
+    diff = _differences(reference, batched)
     if diff:
-        runs = _differing_runs(reference, tables["batched"])
+        runs = _differing_runs(reference, batched)
         print(f"FAIL  results.parquet differ from {against}'s apart from runtime_s: {', '.join(diff)}")
         print(f"      in runs {runs}")
     else:
@@ -386,6 +403,11 @@ def main(argv: list[str] | None = None) -> None:
     )
     ap.add_argument("--batched", action="store_true", help="one worker: one run at a time against batches")
     ap.add_argument("--batch", type=int, help="--batched: runs per batch (default: automatic)")
+    ap.add_argument(
+        "--today-runs",
+        type=int,
+        help="--batched: time today's way on the study's first N runs only (default: all --runs)",
+    )
     ap.add_argument("--repeat", type=int, default=2, help="--batched: alternations of today and batched")
     ap.add_argument(
         "--today-ref", help="--batched: today is the code of this git commit (default: --batch 1)"
