@@ -527,7 +527,7 @@ def _walk_segments(p0, p1, ox, oy, cell_m, cost, blocked, count_blocked, out):
     cells instead (a segment with a non-finite end: NaN, or one blocked piece). The arithmetic of
     the vectorized numpy it replaces, operation for operation (tested float for float)."""
     rows, cols = cost.shape
-    ts = np.empty(64)
+    ts, bx, by = np.empty(64), np.empty(64), np.empty(64)
     for i in range(p0.shape[0]):
         gx0, gy0 = (p0[i, 0] - ox) / cell_m, (p0[i, 1] - oy) / cell_m
         gx1, gy1 = (p1[i, 0] - ox) / cell_m, (p1[i, 1] - oy) / cell_m
@@ -537,18 +537,34 @@ def _walk_segments(p0, p1, ox, oy, cell_m, cost, blocked, count_blocked, out):
             continue
         lo_x, hi_x = math.floor(min(gx0, gx1)), math.ceil(max(gx0, gx1))
         lo_y, hi_y = math.floor(min(gy0, gy1)), math.ceil(max(gy0, gy1))
-        k = 2 + max(hi_x - lo_x - 1, 0) + max(hi_y - lo_y - 1, 0)
-        if k > ts.shape[0]:
-            ts = np.empty(2 * k)
-        ts[0], ts[1] = 0.0, 1.0
-        m = 2
-        for line in range(lo_x + 1, hi_x):
-            ts[m] = min(max((float(line) - gx0) / dx, 0.0), 1.0)
+        nx, ny = max(hi_x - lo_x - 1, 0), max(hi_y - lo_y - 1, 0)
+        if nx + ny + 2 > ts.shape[0]:
+            ts = np.empty(2 * (nx + ny + 2))
+        if nx > bx.shape[0]:
+            bx = np.empty(2 * nx)
+        if ny > by.shape[0]:
+            by = np.empty(2 * ny)
+        # each axis's crossings in increasing t (lines walked against the direction when it is
+        # negative), then the two merged between the ends: the crossings sorted, without a sort
+        for j in range(nx):
+            line = lo_x + 1 + j if dx > 0 else hi_x - 1 - j
+            bx[j] = min(max((float(line) - gx0) / dx, 0.0), 1.0)
+        for j in range(ny):
+            line = lo_y + 1 + j if dy > 0 else hi_y - 1 - j
+            by[j] = min(max((float(line) - gy0) / dy, 0.0), 1.0)
+        ts[0] = 0.0
+        m, a, b = 1, 0, 0
+        while a < nx or b < ny:
+            if b >= ny or (a < nx and bx[a] <= by[b]):
+                ts[m] = bx[a]
+                a += 1
+            else:
+                ts[m] = by[b]
+                b += 1
             m += 1
-        for line in range(lo_y + 1, hi_y):
-            ts[m] = min(max((float(line) - gy0) / dy, 0.0), 1.0)
-            m += 1
-        t = np.sort(ts[:m])
+        ts[m] = 1.0
+        m += 1
+        t = ts
         hyp = np.hypot(dx, dy)
         acc = 0.0
         for q in range(m - 1):

@@ -172,6 +172,16 @@ def test_segment_walks_are_the_numpy_pieces_float_for_float(wall_costmap):
     p1[40:50] = p0[40:50]  # no length
     corners = cm.origin_m + cm.cell_m * rng.integers(0, 10, size=(20, 2)).astype(float)
     p0[50:70], p1[50:70] = corners, corners + cm.cell_m * np.array([3.0, 2.0])  # through corners
+    # across the whole map, along one axis then the other and both ways: many crossings each
+    across = [
+        ((xmin, ymin), (xmax, ymin + 0.1)),
+        ((xmax, ymin + 0.3), (xmin, ymin + 0.3)),
+        ((xmin + 0.2, ymax), (xmin + 0.2, ymin)),
+        ((xmin, ymin), (xmax, ymax)),
+        ((xmax, ymax), (xmin, ymin)),
+        ((xmin, ymax), (xmax, ymin)),
+    ]
+    p0[70:76], p1[70:76] = np.array([a for a, _ in across]), np.array([b for _, b in across])
     s, row, col, length = _numpy_traverse(cm, p0, p1)
     pieces = np.zeros(len(length))
     np.multiply(length, cm.cost_per_m[row, col], out=pieces, where=length > 0)
