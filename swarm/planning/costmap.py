@@ -564,11 +564,10 @@ def _walk_segments(p0, p1, ox, oy, cell_m, cost, blocked, count_blocked, out):
             m += 1
         ts[m] = 1.0
         m += 1
-        t = ts
         hyp = np.hypot(dx, dy)
         acc = 0.0
         for q in range(m - 1):
-            ta, tb = t[q], t[q + 1]
+            ta, tb = ts[q], ts[q + 1]
             length = (tb - ta) * hyp * cell_m
             if not length > 0.0:
                 continue
@@ -589,7 +588,12 @@ def _ends_free(p0, p1, ox, oy, cell_m, xmin, ymin, xmax, ymax, blocked, out):
     for i in range(p0.shape[0]):
         for x, y in ((p0[i, 0], p0[i, 1]), (p1[i, 0], p1[i, 1])):
             inside = xmin <= x <= xmax and ymin <= y <= ymax
-            col = min(max(math.floor((x - ox) / cell_m), 0), cols - 1)
-            row = min(max(math.floor((y - oy) / cell_m), 0), rows - 1)
-            if not inside or blocked[row, col]:
+            if not inside or blocked[clamped_cell(y, oy, cell_m, rows), clamped_cell(x, ox, cell_m, cols)]:
                 out[i] = False
+
+
+@numba.njit(cache=True, inline="always")
+def clamped_cell(v, v0, cell_m, count):
+    """`CostMap.cell_of`'s index along one axis, in its arithmetic, for compiled loops: the cell of
+    coordinate `v` on an axis starting at `v0`, clipped to 0 .. count - 1."""
+    return min(max(math.floor((v - v0) / cell_m), 0), count - 1)

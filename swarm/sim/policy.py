@@ -48,7 +48,7 @@ from swarm.mission.schema import Mission
 from swarm.planning.allocation import auction
 from swarm.sim.criteria import STATION_RADIUS_M
 from swarm.sim.layout import ROLES
-from swarm.sim.routes import pairwise_sum
+from swarm.sim.routes import rest_of_route_m
 from swarm.sim.runview import FOLLOW, LOITER, MARK, RETURN, RETURNING, SEA, RunView
 from swarm.sim.standoff import SafeGround
 
@@ -816,7 +816,7 @@ def _late_markers(
 ):  # fmt: skip
     """`ScriptedPolicy._late_markers` robot by robot, writing the late ones' indices to `late`
     and returning how many: a marker on its way (alive, ashore, its object not marked by it) whose
-    route's rest (numpy's sum, `pairwise_sum`), at least the straight line to its object, takes
+    route's rest (`rest_of_route_m`), at least the straight line to its object, takes
     `factor * length / cruise_mps + allowance_s` or longer."""
     count = 0
     legs = np.empty(0)
@@ -825,16 +825,9 @@ def _late_markers(
         if not (alive[i] and on_map[i] and k >= 0) or object_marker[k] == i:
             continue
         x, y = state[i, 0], state[i, 1]
-        c, e = cursor[i], end[i]
-        m = max(e - c, 0)
-        if m > legs.shape[0]:
-            legs = np.empty(2 * m)
-        if m:
-            legs[0] = np.hypot(points[c, 0] - x, points[c, 1] - y)
-            for j in range(1, m):
-                a, b = c + j - 1, c + j
-                legs[j] = np.hypot(points[b, 0] - points[a, 0], points[b, 1] - points[a, 1])
-        rest = 0.0 + pairwise_sum(legs, 0, m)
+        if end[i] - cursor[i] > legs.shape[0]:
+            legs = np.empty(2 * (end[i] - cursor[i]))
+        rest = rest_of_route_m(points, cursor[i], end[i], x, y, legs)
         straight = np.hypot(objects_m[k, 0] - x, objects_m[k, 1] - y)
         if math.isnan(rest) or math.isnan(straight):
             length = math.nan

@@ -339,14 +339,20 @@ def _remaining_m(points, cursor, end, robots, xy, out):
     legs = np.empty(longest)
     for k in range(robots.shape[0]):
         i = robots[k]
-        c, e = cursor[i], end[i]
-        m = max(e - c, 0)
-        if m:
-            legs[0] = np.hypot(points[c, 0] - xy[k, 0], points[c, 1] - xy[k, 1])
-            for j in range(1, m):
-                a, b = c + j - 1, c + j
-                legs[j] = np.hypot(points[b, 0] - points[a, 0], points[b, 1] - points[a, 1])
-        out[k] = 0.0 + pairwise_sum(legs, 0, m)
+        out[k] = rest_of_route_m(points, cursor[i], end[i], xy[k, 0], xy[k, 1], legs)
+
+
+@numba.njit(cache=True, error_model="numpy", inline="always")
+def rest_of_route_m(points, cur, end, x, y, legs):
+    """How far a robot at (x, y) has still to drive through its route's points cur .. end - 1,
+    as numpy sums the legs' lengths (`pairwise_sum`); `legs`: scratch of at least end - cur."""
+    m = max(end - cur, 0)
+    if m:
+        legs[0] = np.hypot(points[cur, 0] - x, points[cur, 1] - y)
+        for j in range(1, m):
+            a, b = cur + j - 1, cur + j
+            legs[j] = np.hypot(points[b, 0] - points[a, 0], points[b, 1] - points[a, 1])
+    return 0.0 + pairwise_sum(legs, 0, m)
 
 
 @numba.njit(cache=True, error_model="numpy")

@@ -26,7 +26,7 @@ import numba
 import numpy as np
 from scipy.sparse import coo_matrix, csr_matrix
 
-from swarm.planning.costmap import CostMap
+from swarm.planning.costmap import CostMap, clamped_cell
 
 #: The 8 neighbour steps (row, col), straight ones first: the order in which a cell picks its next
 #: step among equally short ways to safe ground.
@@ -73,10 +73,10 @@ def _near_any(points, radius_m, x0, y0, cell_m, out):
     nrows, ncols = out.shape
     for k in range(points.shape[0]):
         ox, oy = points[k, 0], points[k, 1]
-        c0 = min(max(math.floor((ox - radius_m - x0) / cell_m), 0), ncols - 1)
-        r0 = min(max(math.floor((oy - radius_m - y0) / cell_m), 0), nrows - 1)
-        c1 = min(max(math.floor((ox + radius_m - x0) / cell_m), 0), ncols - 1)
-        r1 = min(max(math.floor((oy + radius_m - y0) / cell_m), 0), nrows - 1)
+        c0 = clamped_cell(ox - radius_m, x0, cell_m, ncols)
+        r0 = clamped_cell(oy - radius_m, y0, cell_m, nrows)
+        c1 = clamped_cell(ox + radius_m, x0, cell_m, ncols)
+        r1 = clamped_cell(oy + radius_m, y0, cell_m, nrows)
         r0, c0 = max(r0 - 1, 0), max(c0 - 1, 0)
         r1, c1 = min(r1 + 1, nrows - 1), min(c1 + 1, ncols - 1)
         for r in range(r0, r1 + 1):
@@ -259,9 +259,7 @@ def _farthest(xy, dist, x0, y0, cell_m, rows, cols):
     """`SafeGround.farthest_m`: the largest finite distance of the points' cells (-inf if none)."""
     out = -np.inf
     for k in range(xy.shape[0]):
-        col = min(max(math.floor((xy[k, 0] - x0) / cell_m), 0), cols - 1)
-        row = min(max(math.floor((xy[k, 1] - y0) / cell_m), 0), rows - 1)
-        d = dist[row * cols + col]
+        d = dist[clamped_cell(xy[k, 1], y0, cell_m, rows) * cols + clamped_cell(xy[k, 0], x0, cell_m, cols)]
         if d < np.inf and d > out:
             out = d
     return out
