@@ -21,6 +21,7 @@ import itertools
 import math
 from typing import Annotated, Any, Literal
 
+import numpy as np
 from pydantic import (
     Field,
     PlainValidator,
@@ -591,6 +592,11 @@ class SurfHazard(_Model):
     def impact_damage_probability(self) -> float:
         """Probability one breaker impact disables a robot."""
         return 1.0 / (1.0 + math.exp(-(self.wave_height_m - self.damage_h50_m) / self.damage_spread_m))
+
+    def damage_probability(self, height_m: np.ndarray) -> np.ndarray:
+        """Probability one breaker of each local height (m) disables a robot: inside the surf zone
+        the breakers lose height with the depth (`swarm.world.coastal.local_breaker_height`)."""
+        return 1.0 / (1.0 + np.exp(-(np.asarray(height_m) - self.damage_h50_m) / self.damage_spread_m))
 
 
 def _default_mode_factors() -> dict[str, float]:

@@ -410,8 +410,7 @@ class HazardModel:
         height where the physics reports it (smaller in the swash), else at the offshore one."""
         if inp.wave_height_m is None:
             return self._p_wave
-        surf = self._surf
-        return 1.0 / (1.0 + np.exp(-(inp.wave_height_m - surf.damage_h50_m) / surf.damage_spread_m))
+        return self._surf.damage_probability(inp.wave_height_m)
 
     def rates_per_s(self, inp: HazardInputs) -> np.ndarray:
         """(n, 4) continuous hazard rates, per second, columns `RATE_CAUSES`: failure, immobilized,

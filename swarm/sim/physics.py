@@ -112,7 +112,7 @@ from swarm.sim.physics_kernels import (
     WAVE_Y,
 )
 from swarm.world.beachmap import BeachMap
-from swarm.world.coastal import BREAKING_INDEX, surf_zone_mask
+from swarm.world.coastal import BREAKING_INDEX, local_breaker_height, surf_zone_mask
 
 if TYPE_CHECKING:
     from swarm.mission.schema import Mission
@@ -282,7 +282,7 @@ class Physics:
         d_dx, d_dy = beach.gradient
         cos_slope = 1.0 / np.sqrt(1.0 + d_dx * d_dx + d_dy * d_dy)
         weight = robot.mass_kg * GRAVITY_MPS2
-        height = np.minimum(sea.wave_height_m, BREAKING_INDEX * depth)
+        height = local_breaker_height(elevation, surf, sea.wave_height_m, MIN_DEPTH_M)
         amplitude = np.where(surf, 0.5 * height * np.sqrt(GRAVITY_MPS2 / depth), 0.0)
         props = np.empty((7, rows * cols))  # filled by property, stored by cell
         props[SLOPE_FX] = (-weight * d_dx * cos_slope).ravel()
@@ -291,7 +291,7 @@ class Physics:
         props[CURRENT_X] = np.where(surf, sea.longshore_current_mps, 0.0).ravel()
         props[WAVE_X] = (amplitude * self.shoreward[..., 0]).ravel()
         props[WAVE_Y] = (amplitude * self.shoreward[..., 1]).ravel()
-        props[SURF] = np.where(surf, height, 0.0).ravel()  # the local breaker height (0: not surf)
+        props[SURF] = height.ravel()  # the local breaker height (0: not surf)
         self._props = np.ascontiguousarray(props.T)
 
     @staticmethod

@@ -143,6 +143,17 @@ def surf_zone_mask(
     return np.asarray(water, bool) & (depth < hb / BREAKING_INDEX) & (np.asarray(elevation_m) < hb)
 
 
+def local_breaker_height(
+    elevation_m: np.ndarray, surf: np.ndarray, breaker_height_m: float, min_depth_m: float = 0.05
+) -> np.ndarray:
+    """The height of the breakers over each cell of the surf zone `surf` (0 elsewhere): the
+    offshore breaker height, or the depth-limited gamma x depth where the water is shallower
+    [McCowan, Dean91] (depths below `min_depth_m` count as that). A breaker's damage and its push
+    on a robot depend on this, not on the offshore height."""
+    depth = np.maximum(min_depth_m, -np.asarray(elevation_m, dtype=np.float64))
+    return np.where(surf, np.minimum(breaker_height_m, BREAKING_INDEX * depth), 0.0)
+
+
 def surf_zone_width(
     breaker_height_m: np.ndarray | float, a: float, gamma: float = BREAKING_INDEX
 ) -> np.ndarray | float:

@@ -558,3 +558,16 @@ def test_ten_thousand_robots_are_a_valid_swarm_and_a_typo_is_not(monkeypatch):
         str(err)
         == f"--set (over missions/x.yaml): swarm.count: found {typo}, expected a whole number <= {MAX_ROBOTS}"
     )
+
+
+def test_a_breaker_s_damage_follows_the_logistic_at_its_local_height() -> None:
+    """`SurfHazard.damage_probability` is 1 / (1 + exp(-(H - H50) / spread)) at each height: the
+    offshore height gives `impact_damage_probability`, H50 gives one half, lower breakers less."""
+    from swarm.mission.schema import SurfHazard
+
+    s = SurfHazard(wave_height_m=1.2, damage_h50_m=2.0, damage_spread_m=0.5)
+    p = s.damage_probability([1.2, 2.0, 0.3])
+    assert p[0] == pytest.approx(s.impact_damage_probability(), rel=1e-12)
+    assert p[1] == pytest.approx(0.5)
+    assert p[2] == pytest.approx(1 / (1 + math.exp(1.7 / 0.5)))
+    assert p[2] < p[0] < p[1]

@@ -107,3 +107,14 @@ def test_berm_height_and_cusp_spacing():
     assert coastal.berm_height(1.0, 8.0) == pytest.approx(1.3999, rel=1e-4)
     # g T^2 tan(beta) / pi = 9.81 * 64 * 0.1 / pi = 19.985 m
     assert coastal.cusp_spacing(8.0, 0.1) == pytest.approx(19.985, rel=1e-4)
+
+
+def test_local_breaker_height_is_depth_limited_inside_the_surf_zone_only():
+    """H = min(H_b, gamma h) on surf cells [McCowan; Dean91], depths below the floor counted as the
+    floor, and 0 off the surf zone: 1 m breakers over 0.5 m of water are 0.39 m high."""
+    elevation = np.array([[-3.0, -1.0, -0.5, -0.01, 0.2]])
+    surf = np.array([[False, True, True, True, False]])
+    h = coastal.local_breaker_height(elevation, surf, 1.0, min_depth_m=0.05)
+    assert h[0].tolist() == pytest.approx([0.0, 0.78, 0.39, 0.78 * 0.05, 0.0])
+    # never above the offshore height, however deep
+    assert coastal.local_breaker_height(np.array([-10.0]), np.array([True]), 1.0)[0] == 1.0
