@@ -6,19 +6,25 @@ driven on each terrain class and inside the mine area) meets the mission's hazar
 rates the simulator draws from (`swarm.sim.hazards`):
 
 - failure: 1 - exp(-t / MTBF) over the time from release to the end of the task window;
-- wave impact: 1 - (1 - p_hit)^(t_surf / T), one breaker a wave period while in the surf zone,
-  p_hit = `SurfHazard.impact_damage_probability`; t_surf is the swim over surf-zone cells at swim
-  speed, and at least `SURF_TRANSIT_S`;
+- wave impact: 1 - prod(1 - p_hit), one breaker a wave period T while in the surf zone, each
+  disabling with `SurfHazard.damage_probability` at the local breaker height where it hits
+  (`swarm.world.coastal.local_breaker_height`, as the simulator's hazards); the time in the surf is
+  the planned way in over surf-zone cells (sea leg and ground path) at swim speed, and the heights
+  are met in proportion to the metres on them (`surf_crossing`); ashore, the same on the search
+  tracks' surf-zone metres at the search speed;
 - immobilization: per_km x mode factor x (1 + (slip / 0.3)^2) per metre on each class, with each
   mode's steady slip at cruise (the cost map's mode speeds);
 - rock: damage_per_km per metre on rock;
 - mine: mines met per metre (density x twice the trigger radius) x the chance the sensor has not
-  found the mine before the robot reaches it (inverse cube: exp(-W^2 / (16 pi r^2)) for a mine
-  dead ahead; a tabulated curve: 1 - p averaged over offsets within the trigger radius) x
-  trigger_probability;
+  found the mine while the robot can still keep off it x trigger_probability. Inverse cube:
+  exp(-W^2 / (16 pi d^2)) for a mine dead ahead, at d = the trigger radius + one simulator step
+  at the robot's speed (a mine found at the end of a step is steered clear of from the next,
+  `REACTION_S`); a tabulated curve: 1 - p averaged over offsets within the trigger radius;
 - radio dropout: 1 - exp(-rate x t).
 
-Causes combine as independent competing risks: P(lost) = 1 - prod(1 - p_cause).
+Causes combine as independent competing risks: P(lost) = 1 - prod(1 - p_cause). A robot still
+going when beach operations end drives back to the nearest pick-up point and swims out through the
+surf (`return_losses`): the same rates over that way, weighted by its chance of getting that far.
 
 Search design (`design_search`). The search must be over before its window closes: the synchronized
 clearance less the time to clear the standoff and to bring markers onto the mines found, or the end
@@ -48,7 +54,7 @@ from shapely.geometry.base import BaseGeometry
 
 from swarm.mission.schema import DETECTION_CONFIDENCE, Mission
 from swarm.planning import CostMap
-from swarm.world.coastal import surf_zone_mask
+from swarm.world.coastal import local_breaker_height, surf_zone_mask
 
 #: The detection criterion is designed to hold with this probability over the mine field's draw,
 #: unless the search task says otherwise (`detection_confidence`).
@@ -65,13 +71,14 @@ RETREAT_FACTOR, RETREAT_ALLOWANCE_S, STANDOFF_MARGIN_M = 1.5, 30.0, 10.0
 #: Mark, immobilization: slip scale of the immobilization rate (schema `Immobilization`).
 SLIP_SCALE = 0.3
 PHASE_NAMES = ("sea", "surf", "beach")
-#: `driven_by_class`'s key for the metres in the surf zone.
-SURF_ZONE = "surf zone"
-#: The least time a robot spends among breakers on its way ashore (s). The surf zone along a swim
-#: can be a few metres wide on the map, but the robot is surged back and forth at the waterline
-#: until its wheels find traction: in our simulator robots take 95-215 s (mean 124 s) from their
-#: first breaker to dry ground on gentle_fine's 1 m breakers (mine_clear, seed 1, hazards off).
-SURF_TRANSIT_S = 120.0
+#: The losses on the way back to sea after the task window (`return_losses`), reported beside the
+#: phases above but not counted against the tasks: the robots have done their work by then.
+RETURN_PHASE = "return"
+#: The simulator's trigger radius (`swarm.sim.mines.DEFAULT_TRIGGER_RADIUS_M`, m).
+TRIGGER_RADIUS_M = 0.25
+#: The simulator's step (`swarm.sim.env.SimConfig.dt_s`, s): the scripted policy steers clear of a
+#: mine the step after its sensor finds it, so a robot closing on a mine drives one step further.
+REACTION_S = 0.5
 
 
 def hazards_enabled(mission: Mission) -> bool:
@@ -109,6 +116,15 @@ class Exposure:
     beach_s: float
     driven_m: dict[str, float] = field(default_factory=dict)
     in_mine_area_m: float = 0.0
+    #: -log(1 - p) of one breaker, averaged over the surf crossing (`surf_crossing`); None: every
+    #: breaker at the offshore height
+    breaker_hazard: float | None = None
+    #: ground speed in the mine area (m/s); None: the cruise wheel speed
+    speed_mps: float | None = None
+    #: seconds ashore on ground routes through the surf zone (tracks run down to the waterline),
+    #: and -log(1 - p) of one breaker there, averaged as `breaker_hazard`
+    beach_surf_s: float = 0.0
+    beach_breaker_hazard: float = 0.0
 
 
 def surf_cells(mission: Mission) -> np.ndarray:
@@ -122,14 +138,20 @@ def surf_cells(mission: Mission) -> np.ndarray:
     return mask
 
 
-def driven_by_class(
-    cm: CostMap, polyline: np.ndarray, mine_area: BaseGeometry | None, surf: np.ndarray | None = None
-) -> tuple[dict[str, float], float]:
-    """Metres of `polyline` on each terrain class, and inside `mine_area` (sampled at half a cell);
-    with a `surf` mask, the metres on it are counted under the class name "surf zone" as well."""
+def surf_heights(mission: Mission) -> np.ndarray:
+    """(rows, cols) the local breaker height over the map's surf zone (`surf_cells`), 0 elsewhere:
+    the height the simulator's hazards take a hit at."""
+    bm = mission.beach_map
+    return local_breaker_height(bm.elevation_m, surf_cells(mission), mission.hazards.surf.wave_height_m)
+
+
+def _samples(cm: CostMap, polyline: np.ndarray) -> tuple[np.ndarray, ...]:
+    """`polyline` cut into pieces of at most half a cell: their midpoints (k, 2), lengths (k,) and
+    cells (rows, cols); empty for fewer than two points."""
     pts = np.asarray(polyline, dtype=np.float64).reshape(-1, 2)
     if len(pts) < 2:
-        return {}, 0.0
+        empty = np.empty(0, np.intp)
+        return np.empty((0, 2)), np.empty(0), empty, empty
     seg = np.diff(pts, axis=0)
     length = np.hypot(seg[:, 0], seg[:, 1])
     step = cm.cell_m / 2.0
@@ -138,24 +160,49 @@ def driven_by_class(
     mid = np.repeat(pts[:-1], k, axis=0) + np.repeat(seg, k, axis=0) * t[:, None]
     piece = np.repeat(length / k, k)
     row, col = cm.cell_of(mid[:, 0], mid[:, 1])
+    return mid, piece, row, col
+
+
+def surf_crossing(
+    mission: Mission, cm: CostMap, polyline: np.ndarray, heights: np.ndarray
+) -> tuple[float, float]:
+    """Metres of `polyline` over the surf zone (`heights` > 0, `surf_heights`), and -log(1 - p) of
+    one breaker averaged over those metres (0 without any): a robot swimming through at a steady
+    speed meets each local height in proportion to its metres."""
+    _, piece, row, col = _samples(cm, polyline)
+    h = heights[row, col]
+    on = h > 0
+    metres = float(piece[on].sum())
+    if metres <= 0:
+        return 0.0, 0.0
+    hazard = -np.log1p(-mission.hazards.surf.damage_probability(h[on]))
+    return metres, float((piece[on] * hazard).sum() / metres)
+
+
+def driven_by_class(
+    cm: CostMap, polyline: np.ndarray, mine_area: BaseGeometry | None
+) -> tuple[dict[str, float], float]:
+    """Metres of `polyline` on each terrain class, and inside `mine_area` (sampled at half a cell)."""
+    mid, piece, row, col = _samples(cm, polyline)
+    if not len(piece):
+        return {}, 0.0
     cls = cm.terrain[row, col].astype(np.intp)
     per_class = np.bincount(cls, weights=piece, minlength=len(cm.terrain_classes))
     out = {cm.terrain_classes[c]: float(v) for c, v in enumerate(per_class) if v > 0}
-    if surf is not None:
-        out[SURF_ZONE] = float(piece[surf[row, col]].sum())
     inside = 0.0
     if mine_area is not None:
         inside = float(piece[shapely.contains_xy(mine_area, mid[:, 0], mid[:, 1])].sum())
     return out, inside
 
 
-def undetected_at_contact(mission: Mission) -> float:
-    """Chance the search sensor has not found a mine by the time a robot driving at it sets it off."""
+def undetected_at_contact(mission: Mission, speed_mps: float = 0.0) -> float:
+    """Chance the search sensor has not found a mine in time for a robot driving at it at
+    `speed_mps` to keep off it (module docstring)."""
     search = mission.tasks_of("search")
     if not search:
         return 1.0
     sensor = search[0].sensor
-    r = 0.25  # the simulator's trigger radius (swarm.sim.mines.DEFAULT_TRIGGER_RADIUS_M)
+    r = TRIGGER_RADIUS_M
     if sensor.lateral_range is not None:
         # a pass that closes on a mine draws down to its least distance (`swarm.sim.sensing`), an
         # offset uniform over the trigger radius for a mine the robot meets
@@ -163,7 +210,8 @@ def undetected_at_contact(mission: Mission) -> float:
         lr = sensor.lateral_range
         return float(1.0 - np.interp(x, lr.range_m, lr.probability, right=0.0).mean())
     if sensor.model == "inverse_cube":
-        return math.exp(-(sensor.width_m**2) / (16.0 * math.pi * r * r))
+        d = r + REACTION_S * speed_mps
+        return math.exp(-(sensor.width_m**2) / (16.0 * math.pi * d * d))
     return 0.0 if sensor.width_m / 2.0 > r else 1.0
 
 
@@ -180,7 +228,12 @@ def robot_losses(mission: Mission, cm: CostMap, exposure: Exposure) -> dict[str,
         if dropout > 0:
             out[phase]["cut_off"] = -math.expm1(-dropout * t)
     hits = exposure.surf_s / hz.surf.wave_period_s
-    out["surf"]["wave_impact"] = -math.expm1(hits * math.log1p(-hz.surf.impact_damage_probability()))
+    per_hit = exposure.breaker_hazard
+    if per_hit is None:
+        per_hit = -math.log1p(-hz.surf.impact_damage_probability())
+    out["surf"]["wave_impact"] = -math.expm1(-hits * per_hit)
+    ashore_hits = exposure.beach_surf_s / hz.surf.wave_period_s
+    out["beach"]["wave_impact"] = -math.expm1(-ashore_hits * exposure.beach_breaker_hazard)
     names = cm.speeds.names
     nominal = cm.speeds.nominal_wheel_speed_mps
     slip = {n: 1.0 - float(v) / nominal for n, v in zip(names, cm.speeds.speed_mps, strict=True)}
@@ -188,7 +241,7 @@ def robot_losses(mission: Mission, cm: CostMap, exposure: Exposure) -> dict[str,
     stuck = 0.0
     rock = 0.0
     for cls, metres in exposure.driven_m.items():
-        if cls == SURF_ZONE or lib[cls].is_water:
+        if lib[cls].is_water:
             continue
         s = min(max(slip.get(cls, 0.0), 0.0), 1.0)
         factor = hz.immobilization.mode_factors.get(cls, 1.0) * (1.0 + (s / SLIP_SCALE) ** 2)
@@ -201,10 +254,45 @@ def robot_losses(mission: Mission, cm: CostMap, exposure: Exposure) -> dict[str,
     n_mines = expected_mine_count(mission)
     if n_mines > 0 and areas:
         density = n_mines / shapely.union_all(areas).area
-        met = density * 2 * 0.25 * exposure.in_mine_area_m
-        rate = met * undetected_at_contact(mission) * hz.mines.trigger_probability
+        met = density * 2 * TRIGGER_RADIUS_M * exposure.in_mine_area_m
+        speed = mission.robot.wheel_speed_mps if exposure.speed_mps is None else exposure.speed_mps
+        rate = met * undetected_at_contact(mission, speed) * hz.mines.trigger_probability
         out["beach"]["mine"] = -math.expm1(-rate)
     return {p: {c: v for c, v in d.items() if v > 0} for p, d in out.items()}
+
+
+def return_losses(mission: Mission, cm: CostMap, exposure: Exposure) -> dict[str, float]:
+    """P(lost on the way back to sea) for a robot still going when beach operations end, shared
+    among the causes as in `expected_by_cause`: the same formulas over the drive to the pick-up
+    point (`exposure.beach_s`, `driven_m`) and the swim out through the surf (`surf_s`,
+    `breaker_hazard`); {} without a return."""
+    if not mission.phases.return_to_sea.enabled:
+        return {}
+    merged: dict[str, float] = {}
+    for causes in robot_losses(mission, cm, exposure).values():
+        for cause, p in causes.items():
+            merged[cause] = 1.0 - (1.0 - merged.get(cause, 0.0)) * (1.0 - p)
+    return expected_by_cause({RETURN_PHASE: merged}, (RETURN_PHASE,))[RETURN_PHASE]
+
+
+def expected_by_cause(
+    losses: dict[str, dict[str, float]], phases: tuple[str, ...] = PHASE_NAMES
+) -> dict[str, dict[str, float]]:
+    """One robot's chance of being lost in each phase to each cause, in phase order: a robot lost
+    in one phase is not lost again in the next, and within a phase the causes share its loss in
+    proportion to their hazards -log(1 - p) (constant-rate competing risks). The sum over phases
+    and causes is `lost_probability`."""
+    out: dict[str, dict[str, float]] = {}
+    going = 1.0
+    for phase in phases:
+        causes = losses.get(phase, {})
+        lost = going * (1.0 - math.prod(1.0 - p for p in causes.values()))
+        certain = {c: 1.0 for c, p in causes.items() if p >= 1.0}  # an infinite hazard each
+        weights = certain or {c: -math.log1p(-p) for c, p in causes.items()}
+        total = sum(weights.values())
+        out[phase] = {c: lost * w / total for c, w in weights.items()} if total > 0 else {}
+        going -= lost
+    return out
 
 
 def lost_probability(losses: dict[str, dict[str, float]], phases: tuple[str, ...] = PHASE_NAMES) -> float:

@@ -40,6 +40,7 @@ import numpy as np
 import shapely
 import shapely.ops
 from scipy import ndimage
+from scipy.spatial import cKDTree
 from shapely.geometry import LineString, Polygon
 
 from swarm.errors import SwarmError
@@ -560,13 +561,15 @@ def _plan_search(
     def typical_losses(spacing: float, searchers: int) -> dict:
         run_m = polygon.area / spacing / max(searchers, 1) + approach
         window = budget.search_window_s(mission, task, start)
-        sea_s, surf_s = _swim_times(mission, cm, launches, polygon)
+        sea_s, surf_s, per_hit = _swim_times(mission, cm, launches, polygon)
         exposure = budget.Exposure(
             sea_s=sea_s,
             surf_s=surf_s,
             beach_s=max(window[1] - start, 0.0),
             driven_m={c: f * run_m for c, f in fractions.items()},
             in_mine_area_m=run_m - approach,
+            breaker_hazard=per_hit,
+            speed_mps=speed,
         )
         return budget.robot_losses(mission, cm, exposure)
 
@@ -664,22 +667,35 @@ def _class_fractions(cm: CostMap, polygon) -> dict[str, float]:
     return {cm.terrain_classes[c]: float(v) for c, v in enumerate(counts) if v > 0}
 
 
-def _swim_times(mission: Mission, cm: CostMap, launches: np.ndarray, polygon) -> tuple[float, float]:
+def _swim_times(mission: Mission, cm: CostMap, launches: np.ndarray, polygon) -> tuple[float, float, float]:
     """A robot's time at sea and in the surf (on surf cells) on its way from a launch point toward
-    `polygon`, at swim speed, averaged over the launch points."""
+    `polygon`, at swim speed, and one breaker's hazard on the way (`budget.surf_crossing`),
+    averaged over the launch points."""
     swim = mission.robot.swim_speed_mps
-    mask = budget.surf_cells(mission)
-    sea, surf = [], []
+    heights = budget.surf_heights(mission)
+    sea, surf, hazard = [], [], []
     for p in launches:
         q = np.array(shapely.ops.nearest_points(polygon, shapely.Point(*p))[0].coords[0])
-        by_class, _ = budget.driven_by_class(cm, np.vstack([p, q]), None, mask)
-        surf_m = by_class[budget.SURF_ZONE]
-        water_m = sum(
-            v for c, v in by_class.items() if c != budget.SURF_ZONE and mission.terrain_library[c].is_water
-        )
-        sea.append((mission.launch.release_offshore_m + water_m - surf_m) / swim)
-        surf.append(max(surf_m / swim, budget.SURF_TRANSIT_S))
-    return float(np.mean(sea)), float(np.mean(surf))
+        by_class, _ = budget.driven_by_class(cm, np.vstack([p, q]), None)
+        surf_m, per_hit = budget.surf_crossing(mission, cm, np.vstack([p, q]), heights)
+        water_m = sum(v for c, v in by_class.items() if mission.terrain_library[c].is_water)
+        sea.append((mission.launch.release_offshore_m + max(water_m - surf_m, 0.0)) / swim)
+        surf.append(surf_m / swim)
+        hazard.append(per_hit * surf_m)
+    metres = sum(surf) * swim
+    return float(np.mean(sea)), float(np.mean(surf)), float(sum(hazard) / metres) if metres > 0 else 0.0
+
+
+def _nearest_ashore(mission: Mission, cm: CostMap, surf: np.ndarray):
+    """A function from a point to the segment from it to the centre of the nearest free land cell
+    outside the surf zone (the point alone where there is none)."""
+    water = np.array([mission.terrain_library[c].is_water for c in cm.terrain_classes])
+    rows, cols = np.nonzero(~cm.blocked & ~surf & ~water[cm.terrain.astype(np.intp)])
+    if not len(rows):
+        return lambda p: np.asarray(p, dtype=np.float64).reshape(1, 2)
+    centres = np.column_stack(cm.center_of(rows, cols))
+    tree = cKDTree(centres)
+    return lambda p: np.vstack([p, centres[tree.query(p)[1]]])
 
 
 def _arrival_estimate_s(mission: Mission, launches: np.ndarray, polygon) -> float:
@@ -810,44 +826,58 @@ def _budget(mission: Mission, plan: MissionPlan) -> dict:
     detection once the routes into the area are counted too and after the losses
     (`swarm.mission.budget`)."""
     cm = plan.costmap
-    lib = mission.terrain_library
-    swim = mission.robot.swim_speed_mps
     areas = budget.mine_areas(mission)
-
     mine_area = shapely.union_all(areas) if areas else None
     by_task = {s.task: s for s in plan.search}
-    surf = budget.surf_cells(mission)
+    heights = budget.surf_heights(mission)
+    ashore = _nearest_ashore(mission, cm, heights > 0)
     per_phase: dict[str, dict[str, float]] = {p: {} for p in budget.PHASE_NAMES}
+    back = mission.phases.return_to_sea
+    way_back: dict[str, float] = {}
+    returning = 0.0  # robots expected to set off back to sea
+    if back.enabled:
+        places = back.points or [tuple(rp.launch_m) for rp in plan.robots]
+        pickups = np.unique(np.array([place_xy(plan.beach_map, p) for p in places], np.float64), axis=0)
     lost_by_task: dict[str, float] = {}
     robot_s_by_task: dict[str, float] = {}
-    triggered = 0.0
-    for rp in plan.robots:
-        sea_by_class, _ = budget.driven_by_class(cm, rp.sea_leg_m, None, surf)
-        surf_s = max(sea_by_class[budget.SURF_ZONE] / swim, budget.SURF_TRANSIT_S)
-        arrive = rp.release_s + rp.sea_time_s
-        search = by_task.get(rp.task or "")
-        end = search.design["window_s"][1] if search is not None else mission.phases.beach_end_s
-        land = np.vstack([p.reshape(-1, 2) for p in (rp.ground_m, rp.track_m)])
-        driven, inside = budget.driven_by_class(cm, land, mine_area)
-        exposure = budget.Exposure(
-            sea_s=max(rp.sea_time_s - surf_s, 0.0),
-            surf_s=surf_s,
-            beach_s=max(end - arrive, 0.0),
-            driven_m={c: v for c, v in driven.items() if c != budget.SURF_ZONE and not lib[c].is_water},
-            in_mine_area_m=inside,
+    unseen_blasts = 0.0  # mines expected to go off before any sensor found them
+    ways = [_way_in(mission, cm, rp, heights, ashore, mine_area, by_task) for rp in plan.robots]
+    extra = _off_plan_driving(mission, cm, plan, ways)
+    for way, (more_m, more_inside) in zip(ways, extra, strict=True):
+        exposure = dataclasses.replace(
+            way.exposure,
+            driven_m=_add(way.exposure.driven_m, more_m),
+            in_mine_area_m=way.exposure.in_mine_area_m + more_inside,
         )
         losses = budget.robot_losses(mission, cm, exposure)
-        for phase, causes in losses.items():
+        # what a study counts: every loss until beach operations end, not only the task's window
+        until_end = max(mission.phases.beach_end_s - way.ashore_s, 0.0)
+        whole = budget.robot_losses(mission, cm, dataclasses.replace(exposure, beach_s=until_end))
+        expected = budget.expected_by_cause(whole)
+        for phase, causes in expected.items():
             for cause, p in causes.items():
                 per_phase[phase][cause] = per_phase[phase].get(cause, 0.0) + p
-        triggered += losses["beach"].get("mine", 0.0)
-        if search is not None:
+        if back.enabled:
+            still = 1.0 - budget.lost_probability(whole)
+            returning += still
+            home = _way_back(mission, cm, way.last_m, pickups, heights)
+            for cause, p in budget.return_losses(mission, cm, home).items():
+                way_back[cause] = way_back.get(cause, 0.0) + still * p
+        if blast := expected["beach"].get("mine", 0.0):
+            # most mines that go off were found a moment before (too late to turn): those count
+            # as detected; the rest were never seen
+            speed = exposure.speed_mps if exposure.speed_mps is not None else mission.robot.wheel_speed_mps
+            late = budget.undetected_at_contact(mission, speed)
+            unseen_blasts += blast * (budget.undetected_at_contact(mission) / late if late > 0 else 1.0)
+        if way.search is not None:
             lost = budget.lost_probability(losses)
-            lost_by_task[search.task] = lost_by_task.get(search.task, 0.0) + lost
-            span = max(end - arrive, 0.0)
-            robot_s_by_task[search.task] = robot_s_by_task.get(search.task, 0.0) + span * (1.0 - lost / 2.0)
+            task = way.search.task
+            lost_by_task[task] = lost_by_task.get(task, 0.0) + lost
+            span = max(way.window_end_s - way.arrive_s, 0.0)
+            robot_s_by_task[task] = robot_s_by_task.get(task, 0.0) + span * (1.0 - lost / 2.0)
     criterion = mission.success.min_detection_fraction
     searches = {}
+    markers = 0.0
     for s in plan.search:
         # every robot's sensor is on ashore: the planned routes of landers, spares and observers
         # across the mine area count too (what robots drive off the plan, parking or taking
@@ -873,11 +903,13 @@ def _budget(mission: Mission, plan: MissionPlan) -> dict:
         mines = s.design["mines_expected"]
         after = s.expected_detection * min(1.0, capacity / need if need > 0 else 1.0)
         if mines > 0:
-            after = max(0.0, after - triggered / mines)
+            after = max(0.0, after - unseen_blasts / mines)
         random_count = budget.mine_count_is_random(mission)
         as_planned = budget.p_criterion_met(criterion, mines, s.expected_detection, poisson=random_count)
         after_losses = budget.p_criterion_met(criterion, mines, after, poisson=random_count)
         s.design["p_criterion_met"] = as_planned
+        if task.mark and task.clearance is not None:
+            markers += mines * after  # each mine found is marked by a robot the clearance expends
         searches[s.task] = {
             "criterion": criterion,
             "expected_detection": s.expected_detection,
@@ -887,6 +919,10 @@ def _budget(mission: Mission, plan: MissionPlan) -> dict:
             "expected_team_losses": lost_by_task.get(s.task, 0.0),
             "reserves": s.design["reserves"],
         }
+    if back.enabled and returning > 0:
+        # the markers the clearance expends do not go back
+        share = max(returning - markers, 0.0) / returning
+        per_phase[budget.RETURN_PHASE] = {c: v * share for c, v in way_back.items()}
     total = sum(sum(c.values()) for c in per_phase.values())
     return {
         "hazards": budget.hazards_enabled(mission),
@@ -894,6 +930,119 @@ def _budget(mission: Mission, plan: MissionPlan) -> dict:
         "expected_lost": total,
         "search": searches,
     }
+
+
+@dataclass
+class _WayIn:
+    """One robot's planned exposure until its task window ends (`_budget`), and where it is then."""
+
+    exposure: budget.Exposure
+    search: SearchPlan | None
+    arrive_s: float  # at its entry (release and swim)
+    ashore_s: float  # out of the surf on dry ground
+    window_end_s: float
+    last_m: np.ndarray  # where its planned route ends
+    track_m: dict[str, float]  # metres of its search tracks on each class
+    track_inside_m: float  # of which in the mine area
+
+
+def _way_in(mission: Mission, cm: CostMap, rp: RobotPlan, heights, ashore, mine_area, by_task) -> _WayIn:
+    """Robot `rp`'s exposure along its planned route: the swim, the surf along the sea leg and the
+    ground path (a spare swims from its entry to the nearest dry ground, where the simulator's
+    robots wait out of the breakers), and its ground route until its task's window ends."""
+    lib = mission.terrain_library
+    swim = mission.robot.swim_speed_mps
+    sea_leg = rp.sea_leg_m.reshape(-1, 2)
+    on = rp.ground_m.reshape(-1, 2) if len(rp.ground_m) else ashore(sea_leg[-1])
+    leg_surf_m, _ = budget.surf_crossing(mission, cm, sea_leg, heights)
+    surf_m, per_hit = budget.surf_crossing(mission, cm, np.vstack([sea_leg, on]), heights)
+    arrive = rp.release_s + rp.sea_time_s
+    ashore_s = arrive + (surf_m - leg_surf_m) / swim
+    search = by_task.get(rp.task or "")
+    end = search.design["window_s"][1] if search is not None else mission.phases.beach_end_s
+    land = np.vstack([p.reshape(-1, 2) for p in (rp.ground_m, rp.track_m)])
+    driven, inside = budget.driven_by_class(cm, land, mine_area)
+    track, track_inside = budget.driven_by_class(cm, rp.track_m, mine_area)
+    speed = search.design.get("speed_mps") if search is not None else None
+    wet_m, wet_hit = budget.surf_crossing(mission, cm, rp.track_m, heights)
+    exposure = budget.Exposure(
+        sea_s=max(rp.sea_time_s - leg_surf_m / swim, 0.0),
+        surf_s=surf_m / swim,
+        beach_s=max(end - ashore_s, 0.0),
+        driven_m={c: v for c, v in driven.items() if not lib[c].is_water},
+        in_mine_area_m=inside,
+        breaker_hazard=per_hit,
+        speed_mps=speed,
+        beach_surf_s=wet_m / (speed or mission.robot.wheel_speed_mps),
+        beach_breaker_hazard=wet_hit,
+    )
+    last = (land if len(land) else on)[-1]
+    dry = {c: v for c, v in track.items() if not lib[c].is_water}
+    return _WayIn(exposure, search, arrive, ashore_s, end, last, dry, track_inside)
+
+
+def _off_plan_driving(mission: Mission, cm: CostMap, plan: MissionPlan, ways: list[_WayIn]) -> list:
+    """What the scripted policy has robots drive beyond their planned routes, for each robot: the
+    metres on each class and in the mine area. A reserve takes over a lost searcher's track (about
+    half of it is left, on average, for a robot lost at a steady rate) and drives to each mine
+    found to mark it; the work goes to the task's reserves, else to the mission's spares, else to
+    its searchers, in equal shares."""
+    out: list = [({}, 0.0) for _ in ways]
+    for s in plan.search:
+        task = next(t for t in mission.tasks_of("search") if t.area == s.area)
+        team = [k for k, w in enumerate(ways) if w.search is s]
+        searchers = [k for k in team if plan.robots[k].role == "search"]
+        takers = [k for k in team if plan.robots[k].role == "spare"]
+        takers = takers or [k for k, rp in enumerate(plan.robots) if rp.role == "spare"] or searchers
+        if not searchers or not takers:
+            continue
+        metres: dict[str, float] = {}
+        inside = 0.0
+        for k in searchers:
+            lost = budget.lost_probability(budget.robot_losses(mission, cm, ways[k].exposure))
+            for c, v in ways[k].track_m.items():
+                metres[c] = metres.get(c, 0.0) + lost * v / 2.0
+            inside += lost * ways[k].track_inside_m / 2.0
+        if task.mark:
+            # to each mine found, from a taker's spot, over the ground the tracks cover
+            track_total = sum(sum(ways[k].track_m.values()) for k in searchers)
+            points = np.vstack([plan.robots[k].track_m for k in searchers])
+            spots = np.array([ways[k].last_m for k in takers])
+            gaps = points[:, None, :] - spots[None, :, :]
+            reach = float(np.hypot(gaps[..., 0], gaps[..., 1]).min(axis=1).mean())
+            found = s.design["mines_expected"] * s.expected_detection
+            for k in searchers:
+                for c, v in ways[k].track_m.items():
+                    metres[c] = metres.get(c, 0.0) + found * reach * v / track_total
+            inside += found * reach
+        share = {c: v / len(takers) for c, v in metres.items()}
+        for k in takers:
+            out[k] = (_add(out[k][0], share), out[k][1] + inside / len(takers))
+    return out
+
+
+def _add(a: dict[str, float], b: dict[str, float]) -> dict[str, float]:
+    """Metres by class, summed."""
+    return {c: a.get(c, 0.0) + b.get(c, 0.0) for c in {*a, *b}}
+
+
+def _way_back(
+    mission: Mission, cm: CostMap, start: np.ndarray, pickups: np.ndarray, heights
+) -> budget.Exposure:
+    """The way back to sea from `start`: a straight drive to the nearest pick-up point and the swim
+    out through the surf on it."""
+    lib = mission.terrain_library
+    way = np.vstack([start, pickups[np.argmin(np.hypot(*(pickups - start).T))]])
+    surf_m, per_hit = budget.surf_crossing(mission, cm, way, heights)
+    driven, _ = budget.driven_by_class(cm, way, None)
+    dry = {c: v for c, v in driven.items() if not lib[c].is_water}
+    return budget.Exposure(
+        sea_s=0.0,
+        surf_s=surf_m / mission.robot.swim_speed_mps,
+        beach_s=sum(dry.values()) / mission.robot.wheel_speed_mps,
+        driven_m=dry,
+        breaker_hazard=per_hit,
+    )
 
 
 def _source(mission: Mission) -> dict:

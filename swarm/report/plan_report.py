@@ -89,7 +89,7 @@ def _losses(d: dict) -> dict | None:
     if not b:
         return None
     # in mission order (plan.json sorts its keys)
-    order = {p: i for i, p in enumerate(("sea", "surf", "beach"))}
+    order = {p: i for i, p in enumerate(("sea", "surf", "beach", "return"))}
     phases = dict(sorted(b["expected_losses"].items(), key=lambda kv: order.get(kv[0], len(order))))
     return {"hazards": b.get("hazards", True), "by_phase": phases, "total": b["expected_lost"]}
 
@@ -354,8 +354,28 @@ def summary_rows(plan: MissionPlan) -> list[list[str]]:
     return summary_table(plan_data(plan.as_dict()))
 
 
-def evaluation_table(ev: dict) -> list[list[str]]:
-    """What the plan's simulations delivered (`swarm plan --evaluate`)."""
+#: The simulator's phase of a loss (`swarm.sim.layout.PHASES`) -> the plan budget's phase.
+BUDGET_PHASE = {
+    "waiting": "sea",
+    "sea_transit": "sea",
+    "surf_crossing": "surf",
+    "beach": "beach",
+    "returning": "return",
+}
+
+
+def lost_by_phase(ev: dict) -> dict[str, float]:
+    """Robots lost a run in each of the plan budget's phases, in a plan's simulations."""
+    out: dict[str, float] = {}
+    for phase, causes in ev.get("losses_by_phase", {}).items():
+        key = BUDGET_PHASE.get(phase, phase)
+        out[key] = out.get(key, 0.0) + sum(causes.values()) / ev["runs"]
+    return out
+
+
+def evaluation_table(ev: dict, expected: dict | None = None) -> list[list[str]]:
+    """What the plan's simulations delivered (`swarm plan --evaluate`), beside the plan's expected
+    losses (`plan_data(...)["losses"]`) when given."""
     pct = f"{ev['confidence']:.0%}"
     rows = [
         ["runs", str(ev["runs"])],
@@ -378,6 +398,16 @@ def evaluation_table(ev: dict) -> list[list[str]]:
     rows.append(
         ["robots lost per run", f"mean {lost['mean']:.1f}, {lost['min']:g} to {lost['max']:g} ({causes})"]
     )
+    if expected is not None and expected["hazards"]:
+        simulated = lost_by_phase(ev)
+        phases = [*expected["by_phase"], *(p for p in simulated if p not in expected["by_phase"])]
+        pairs = ", ".join(
+            f"{p} {simulated.get(p, 0.0):.1f} / {sum(expected['by_phase'].get(p, {}).values()):.1f}"
+            for p in phases
+        )
+        rows.append(
+            ["lost per run: simulated / planned", f"{lost['mean']:.1f} / {expected['total']:.1f} ({pairs})"]
+        )
     for size in ev.get("sizes", []):
         rows.append(
             [
@@ -440,7 +470,9 @@ def plan_report(
         criterion = (d.get("criteria") or {}).get("min_detection_fraction")
         blocks.append(
             Table(
-                "The plan in simulation (swarm plan --evaluate)", evaluation_table(evaluation), header=False
+                "The plan in simulation (swarm plan --evaluate)",
+                evaluation_table(evaluation, data.get("losses")),
+                header=False,
             )
         )
         searched = bool(evaluation.get("detection_values"))

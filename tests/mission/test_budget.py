@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 import pytest
 from scipy.stats import binom
 
@@ -199,3 +200,83 @@ def test_a_poisson_mine_count_is_averaged_over() -> None:
     need = budget.detection_needed(0.9, 14.0, 0.95, poisson=True)
     assert budget.p_criterion_met(0.9, 14.0, need, poisson=True) == pytest.approx(0.95, abs=1e-4)
     assert need > budget.detection_needed(0.9, 14.0, 0.95)
+
+
+def test_the_simulator_s_step_and_trigger_radius_are_the_budget_s() -> None:
+    """The budget's mine model counts one simulator step of travel after a find and the simulator's
+    trigger radius; both live in the simulator, below this layer, so they are checked here."""
+    from swarm.sim.env import SimConfig
+    from swarm.sim.mines import DEFAULT_TRIGGER_RADIUS_M
+
+    assert SimConfig().dt_s == budget.REACTION_S
+    assert budget.TRIGGER_RADIUS_M == DEFAULT_TRIGGER_RADIUS_M
+
+
+@pytest.mark.parametrize("speed", [0.0, 0.3, 0.6])
+def test_a_mine_found_too_late_to_turn_counts_as_met_undetected(mission, speed) -> None:
+    """Dead ahead, the robot keeps off a mine only if its sensor finds it a step's travel before
+    the trigger radius: missed with exp(-W^2 / (16 pi d^2)), d = r + v dt; faster is riskier."""
+    w = mission.tasks_of("search")[0].sensor.width_m
+    d = budget.TRIGGER_RADIUS_M + budget.REACTION_S * speed
+    assert budget.undetected_at_contact(mission, speed) == pytest.approx(
+        math.exp(-(w**2) / (16 * math.pi * d * d))
+    )
+    assert budget.undetected_at_contact(mission, speed + 0.1) > budget.undetected_at_contact(mission, speed)
+
+
+def test_surf_crossing_counts_the_surf_metres_and_the_local_breakers(mission, costmap) -> None:
+    """A straight swim across gentle_fine's surf zone: its surf metres are the line's length over
+    surf cells (checked on a 1 cm walk), and one breaker's mean hazard lies between the smallest
+    and the largest local breaker's, below the offshore breaker's (they lose height toward the
+    shore). A line on dry ground crosses nothing."""
+    heights = budget.surf_heights(mission)
+    rows, cols = np.nonzero(heights > 0)
+    x, y = costmap.center_of(rows, cols)
+    # a north-south line through the middle of the surf zone, from deep water to the beach
+    x0 = float(np.median(x))
+    line = np.array([[x0, float(y.min()) - 20.0], [x0, float(y.max()) + 20.0]])
+    metres, per_hit = budget.surf_crossing(mission, costmap, line, heights)
+    t = np.linspace(0.0, 1.0, int(np.hypot(*(line[1] - line[0])) / 0.01) + 1)
+    walk = line[0] + (line[1] - line[0]) * t[:, None]
+    r, c = costmap.cell_of(walk[:, 0], walk[:, 1])
+    on = heights[r, c] > 0
+    assert metres == pytest.approx(on.mean() * np.hypot(*(line[1] - line[0])), abs=costmap.cell_m)
+    hazard = -np.log1p(-mission.hazards.surf.damage_probability(heights[r, c][on]))
+    assert hazard.min() - 1e-12 <= per_hit <= hazard.max() + 1e-12
+    assert per_hit < -math.log1p(-mission.hazards.surf.impact_damage_probability())
+    dry = np.array([[x0, float(y.max()) + 30.0], [x0 + 5.0, float(y.max()) + 30.0]])
+    assert budget.surf_crossing(mission, costmap, dry, heights) == (0.0, 0.0)
+
+
+def test_expected_losses_by_cause_count_a_robot_once() -> None:
+    """Losses by phase in order: a robot lost at sea is not lost again ashore; within a phase the
+    causes share the phase's loss by their hazards; the whole is P(lost)."""
+    losses = {"sea": {"failure": 0.1}, "surf": {"wave_impact": 0.2, "failure": 0.05}, "beach": {"mine": 0.3}}
+    got = budget.expected_by_cause(losses)
+    assert got["sea"]["failure"] == pytest.approx(0.1)
+    surf = 0.9 * (1 - 0.8 * 0.95)
+    assert sum(got["surf"].values()) == pytest.approx(surf)
+    assert got["surf"]["wave_impact"] / got["surf"]["failure"] == pytest.approx(
+        math.log(0.8) / math.log(0.95)
+    )
+    assert got["beach"]["mine"] == pytest.approx((0.9 - surf) * 0.3)
+    total = sum(v for phase in got.values() for v in phase.values())
+    assert total == pytest.approx(budget.lost_probability(losses))
+    assert budget.expected_by_cause({"sea": {"failure": 1.0}, "beach": {"mine": 0.5}})["beach"]["mine"] == 0.0
+
+
+def test_the_way_back_to_sea_uses_the_same_rates(mission, costmap) -> None:
+    """The return's loss is 1 - prod(1 - p) over the drive and the swim out, shared by cause; a
+    mission without a return has none."""
+    way = budget.Exposure(sea_s=0.0, surf_s=200.0, beach_s=600.0, driven_m={"soft_sand": 300.0})
+    back = load_mission(MINE_CLEAR, {"phases.return_to_sea.enabled": True})
+    parts = budget.robot_losses(back, costmap, way)
+    got = budget.return_losses(back, costmap, way)
+    assert sum(got.values()) == pytest.approx(
+        1 - math.prod(1 - p for c in parts.values() for p in c.values())
+    )
+    assert set(got) == {c for part in parts.values() for c in part}
+    assert (
+        budget.return_losses(load_mission(MINE_CLEAR, {"phases.return_to_sea.enabled": False}), costmap, way)
+        == {}
+    )
