@@ -983,10 +983,10 @@ def _way_in(mission: Mission, cm: CostMap, rp: RobotPlan, heights, ashore, mine_
 
 def _off_plan_driving(mission: Mission, cm: CostMap, plan: MissionPlan, ways: list[_WayIn]) -> list:
     """What the scripted policy has robots drive beyond their planned routes, for each robot: the
-    metres on each class and in the mine area. A reserve takes over a lost searcher's track (about
-    half of it is left, on average, for a robot lost at a steady rate) and drives to each mine
-    found to mark it; the work goes to the task's reserves, else to the mission's spares, else to
-    its searchers, in equal shares."""
+    metres on each class and in the mine area. A reserve takes over a lost searcher's track (all
+    of it for a searcher lost on the way in, about half for one lost on it at a steady rate),
+    driving there from its spot, and drives to each mine found to mark it; the work goes to the
+    task's reserves, else to the mission's spares, else to its searchers, in equal shares."""
     out: list = [({}, 0.0) for _ in ways]
     for s in plan.search:
         task = next(t for t in mission.tasks_of("search") if t.area == s.area)
@@ -996,25 +996,30 @@ def _off_plan_driving(mission: Mission, cm: CostMap, plan: MissionPlan, ways: li
         takers = takers or [k for k, rp in enumerate(plan.robots) if rp.role == "spare"] or searchers
         if not searchers or not takers:
             continue
+        # a trip from a taker's spot to a point of the tracks, over the ground the tracks cover
+        track_total = sum(sum(ways[k].track_m.values()) for k in searchers)
+        points = np.vstack([plan.robots[k].track_m for k in searchers])
+        spots = np.array([ways[k].last_m for k in takers])
+        gaps = points[:, None, :] - spots[None, :, :]
+        reach = float(np.hypot(gaps[..., 0], gaps[..., 1]).min(axis=1).mean())
+        trips = 0.0
         metres: dict[str, float] = {}
         inside = 0.0
         for k in searchers:
-            lost = budget.lost_probability(budget.robot_losses(mission, cm, ways[k].exposure))
+            by_phase = budget.expected_by_cause(budget.robot_losses(mission, cm, ways[k].exposure))
+            early = sum(sum(by_phase[p].values()) for p in ("sea", "surf"))
+            left = early + sum(by_phase["beach"].values()) / 2.0  # of its track, on average
             for c, v in ways[k].track_m.items():
-                metres[c] = metres.get(c, 0.0) + lost * v / 2.0
-            inside += lost * ways[k].track_inside_m / 2.0
+                metres[c] = metres.get(c, 0.0) + left * v
+            inside += left * ways[k].track_inside_m
+            trips += early + sum(by_phase["beach"].values())
         if task.mark:
-            # to each mine found, from a taker's spot, over the ground the tracks cover
-            track_total = sum(sum(ways[k].track_m.values()) for k in searchers)
-            points = np.vstack([plan.robots[k].track_m for k in searchers])
-            spots = np.array([ways[k].last_m for k in takers])
-            gaps = points[:, None, :] - spots[None, :, :]
-            reach = float(np.hypot(gaps[..., 0], gaps[..., 1]).min(axis=1).mean())
-            found = s.design["mines_expected"] * s.expected_detection
+            trips += s.design["mines_expected"] * s.expected_detection  # one to each mine found
+        if track_total > 0:
             for k in searchers:
                 for c, v in ways[k].track_m.items():
-                    metres[c] = metres.get(c, 0.0) + found * reach * v / track_total
-            inside += found * reach
+                    metres[c] = metres.get(c, 0.0) + trips * reach * v / track_total
+            inside += trips * reach
         share = {c: v / len(takers) for c, v in metres.items()}
         for k in takers:
             out[k] = (_add(out[k][0], share), out[k][1] + inside / len(takers))
