@@ -40,12 +40,11 @@ import numpy as np
 import shapely
 import shapely.ops
 from scipy import ndimage
-from scipy.spatial import cKDTree
 from shapely.geometry import LineString, Polygon
 
 from swarm.errors import SwarmError
 from swarm.files import write_text_atomic
-from swarm.mission import budget
+from swarm.mission import budget, exposure
 from swarm.mission.schema import Mission
 from swarm.planning import CostMap, PlanningError, build_costmap, detection
 from swarm.planning.allocation import assign
@@ -562,7 +561,7 @@ def _plan_search(
         run_m = polygon.area / spacing / max(searchers, 1) + approach
         window = budget.search_window_s(mission, task, start)
         sea_s, surf_s, per_hit = _swim_times(mission, cm, launches, polygon)
-        exposure = budget.Exposure(
+        exposed = budget.Exposure(
             sea_s=sea_s,
             surf_s=surf_s,
             beach_s=max(window[1] - start, 0.0),
@@ -571,7 +570,7 @@ def _plan_search(
             breaker_hazard=per_hit,
             speed_mps=speed,
         )
-        return budget.robot_losses(mission, cm, exposure)
+        return budget.robot_losses(mission, cm, exposed)
 
     design = budget.design_search(
         mission,
@@ -684,18 +683,6 @@ def _swim_times(mission: Mission, cm: CostMap, launches: np.ndarray, polygon) ->
         hazard.append(per_hit * surf_m)
     metres = sum(surf) * swim
     return float(np.mean(sea)), float(np.mean(surf)), float(sum(hazard) / metres) if metres > 0 else 0.0
-
-
-def _nearest_ashore(mission: Mission, cm: CostMap, surf: np.ndarray):
-    """A function from a point to the segment from it to the centre of the nearest free land cell
-    outside the surf zone (the point alone where there is none)."""
-    water = np.array([mission.terrain_library[c].is_water for c in cm.terrain_classes])
-    rows, cols = np.nonzero(~cm.blocked & ~surf & ~water[cm.terrain.astype(np.intp)])
-    if not len(rows):
-        return lambda p: np.asarray(p, dtype=np.float64).reshape(1, 2)
-    centres = np.column_stack(cm.center_of(rows, cols))
-    tree = cKDTree(centres)
-    return lambda p: np.vstack([p, centres[tree.query(p)[1]]])
 
 
 def _arrival_estimate_s(mission: Mission, launches: np.ndarray, polygon) -> float:
@@ -830,7 +817,7 @@ def _budget(mission: Mission, plan: MissionPlan) -> dict:
     mine_area = shapely.union_all(areas) if areas else None
     by_task = {s.task: s for s in plan.search}
     heights = budget.surf_heights(mission)
-    ashore = _nearest_ashore(mission, cm, heights > 0)
+    ashore = exposure.nearest_ashore(mission, cm, heights > 0)
     per_phase: dict[str, dict[str, float]] = {p: {} for p in budget.PHASE_NAMES}
     back = mission.phases.return_to_sea
     way_back: dict[str, float] = {}
@@ -841,18 +828,18 @@ def _budget(mission: Mission, plan: MissionPlan) -> dict:
     lost_by_task: dict[str, float] = {}
     robot_s_by_task: dict[str, float] = {}
     unseen_blasts = 0.0  # mines expected to go off before any sensor found them
-    ways = [_way_in(mission, cm, rp, heights, ashore, mine_area, by_task) for rp in plan.robots]
-    extra = _off_plan_driving(mission, cm, plan, ways)
+    ways = [exposure.way_in(mission, cm, rp, heights, ashore, mine_area, by_task) for rp in plan.robots]
+    extra = exposure.off_plan_driving(mission, cm, plan, ways)
     for way, (more_m, more_inside) in zip(ways, extra, strict=True):
-        exposure = dataclasses.replace(
+        exposed = dataclasses.replace(
             way.exposure,
-            driven_m=_add(way.exposure.driven_m, more_m),
+            driven_m=exposure.add_metres(way.exposure.driven_m, more_m),
             in_mine_area_m=way.exposure.in_mine_area_m + more_inside,
         )
-        losses = budget.robot_losses(mission, cm, exposure)
+        losses = budget.robot_losses(mission, cm, exposed)
         # what a study counts: every loss until beach operations end, not only the task's window
         until_end = max(mission.phases.beach_end_s - way.ashore_s, 0.0)
-        whole = budget.robot_losses(mission, cm, dataclasses.replace(exposure, beach_s=until_end))
+        whole = budget.robot_losses(mission, cm, dataclasses.replace(exposed, beach_s=until_end))
         expected = budget.expected_by_cause(whole)
         for phase, causes in expected.items():
             for cause, p in causes.items():
@@ -860,13 +847,13 @@ def _budget(mission: Mission, plan: MissionPlan) -> dict:
         if back.enabled:
             still = 1.0 - budget.lost_probability(whole)
             returning += still
-            home = _way_back(mission, cm, way.last_m, pickups, heights)
+            home = exposure.way_back(mission, cm, way.last_m, pickups, heights)
             for cause, p in budget.return_losses(mission, cm, home).items():
                 way_back[cause] = way_back.get(cause, 0.0) + still * p
         if blast := expected["beach"].get("mine", 0.0):
             # most mines that go off were found a moment before (too late to turn): those count
             # as detected; the rest were never seen
-            speed = exposure.speed_mps if exposure.speed_mps is not None else mission.robot.wheel_speed_mps
+            speed = exposed.speed_mps if exposed.speed_mps is not None else mission.robot.wheel_speed_mps
             late = budget.undetected_at_contact(mission, speed)
             unseen_blasts += blast * (budget.undetected_at_contact(mission) / late if late > 0 else 1.0)
         if way.search is not None:
@@ -930,124 +917,6 @@ def _budget(mission: Mission, plan: MissionPlan) -> dict:
         "expected_lost": total,
         "search": searches,
     }
-
-
-@dataclass
-class _WayIn:
-    """One robot's planned exposure until its task window ends (`_budget`), and where it is then."""
-
-    exposure: budget.Exposure
-    search: SearchPlan | None
-    arrive_s: float  # at its entry (release and swim)
-    ashore_s: float  # out of the surf on dry ground
-    window_end_s: float
-    last_m: np.ndarray  # where its planned route ends
-    track_m: dict[str, float]  # metres of its search tracks on each class
-    track_inside_m: float  # of which in the mine area
-
-
-def _way_in(mission: Mission, cm: CostMap, rp: RobotPlan, heights, ashore, mine_area, by_task) -> _WayIn:
-    """Robot `rp`'s exposure along its planned route: the swim, the surf along the sea leg and the
-    ground path (a spare swims from its entry to the nearest dry ground, where the simulator's
-    robots wait out of the breakers), and its ground route until its task's window ends."""
-    lib = mission.terrain_library
-    swim = mission.robot.swim_speed_mps
-    sea_leg = rp.sea_leg_m.reshape(-1, 2)
-    on = rp.ground_m.reshape(-1, 2) if len(rp.ground_m) else ashore(sea_leg[-1])
-    leg_surf_m, _ = budget.surf_crossing(mission, cm, sea_leg, heights)
-    surf_m, per_hit = budget.surf_crossing(mission, cm, np.vstack([sea_leg, on]), heights)
-    arrive = rp.release_s + rp.sea_time_s
-    ashore_s = arrive + (surf_m - leg_surf_m) / swim
-    search = by_task.get(rp.task or "")
-    end = search.design["window_s"][1] if search is not None else mission.phases.beach_end_s
-    land = np.vstack([p.reshape(-1, 2) for p in (rp.ground_m, rp.track_m)])
-    driven, inside = budget.driven_by_class(cm, land, mine_area)
-    track, track_inside = budget.driven_by_class(cm, rp.track_m, mine_area)
-    speed = search.design.get("speed_mps") if search is not None else None
-    wet_m, wet_hit = budget.surf_crossing(mission, cm, rp.track_m, heights)
-    exposure = budget.Exposure(
-        sea_s=max(rp.sea_time_s - leg_surf_m / swim, 0.0),
-        surf_s=surf_m / swim,
-        beach_s=max(end - ashore_s, 0.0),
-        driven_m={c: v for c, v in driven.items() if not lib[c].is_water},
-        in_mine_area_m=inside,
-        breaker_hazard=per_hit,
-        speed_mps=speed,
-        beach_surf_s=wet_m / (speed or mission.robot.wheel_speed_mps),
-        beach_breaker_hazard=wet_hit,
-    )
-    last = (land if len(land) else on)[-1]
-    dry = {c: v for c, v in track.items() if not lib[c].is_water}
-    return _WayIn(exposure, search, arrive, ashore_s, end, last, dry, track_inside)
-
-
-def _off_plan_driving(mission: Mission, cm: CostMap, plan: MissionPlan, ways: list[_WayIn]) -> list:
-    """What the scripted policy has robots drive beyond their planned routes, for each robot: the
-    metres on each class and in the mine area. A reserve takes over a lost searcher's track (all
-    of it for a searcher lost on the way in, about half for one lost on it at a steady rate),
-    driving there from its spot, and drives to each mine found to mark it; the work goes to the
-    task's reserves, else to the mission's spares, else to its searchers, in equal shares."""
-    out: list = [({}, 0.0) for _ in ways]
-    for s in plan.search:
-        task = next(t for t in mission.tasks_of("search") if t.area == s.area)
-        team = [k for k, w in enumerate(ways) if w.search is s]
-        searchers = [k for k in team if plan.robots[k].role == "search"]
-        takers = [k for k in team if plan.robots[k].role == "spare"]
-        takers = takers or [k for k, rp in enumerate(plan.robots) if rp.role == "spare"] or searchers
-        if not searchers or not takers:
-            continue
-        # a trip from a taker's spot to a point of the tracks, over the ground the tracks cover
-        track_total = sum(sum(ways[k].track_m.values()) for k in searchers)
-        points = np.vstack([plan.robots[k].track_m for k in searchers])
-        spots = np.array([ways[k].last_m for k in takers])
-        gaps = points[:, None, :] - spots[None, :, :]
-        reach = float(np.hypot(gaps[..., 0], gaps[..., 1]).min(axis=1).mean())
-        trips = 0.0
-        metres: dict[str, float] = {}
-        inside = 0.0
-        for k in searchers:
-            by_phase = budget.expected_by_cause(budget.robot_losses(mission, cm, ways[k].exposure))
-            early = sum(sum(by_phase[p].values()) for p in ("sea", "surf"))
-            left = early + sum(by_phase["beach"].values()) / 2.0  # of its track, on average
-            for c, v in ways[k].track_m.items():
-                metres[c] = metres.get(c, 0.0) + left * v
-            inside += left * ways[k].track_inside_m
-            trips += early + sum(by_phase["beach"].values())
-        if task.mark:
-            trips += s.design["mines_expected"] * s.expected_detection  # one to each mine found
-        if track_total > 0:
-            for k in searchers:
-                for c, v in ways[k].track_m.items():
-                    metres[c] = metres.get(c, 0.0) + trips * reach * v / track_total
-            inside += trips * reach
-        share = {c: v / len(takers) for c, v in metres.items()}
-        for k in takers:
-            out[k] = (_add(out[k][0], share), out[k][1] + inside / len(takers))
-    return out
-
-
-def _add(a: dict[str, float], b: dict[str, float]) -> dict[str, float]:
-    """Metres by class, summed."""
-    return {c: a.get(c, 0.0) + b.get(c, 0.0) for c in {*a, *b}}
-
-
-def _way_back(
-    mission: Mission, cm: CostMap, start: np.ndarray, pickups: np.ndarray, heights
-) -> budget.Exposure:
-    """The way back to sea from `start`: a straight drive to the nearest pick-up point and the swim
-    out through the surf on it."""
-    lib = mission.terrain_library
-    way = np.vstack([start, pickups[np.argmin(np.hypot(*(pickups - start).T))]])
-    surf_m, per_hit = budget.surf_crossing(mission, cm, way, heights)
-    driven, _ = budget.driven_by_class(cm, way, None)
-    dry = {c: v for c, v in driven.items() if not lib[c].is_water}
-    return budget.Exposure(
-        sea_s=0.0,
-        surf_s=surf_m / mission.robot.swim_speed_mps,
-        beach_s=sum(dry.values()) / mission.robot.wheel_speed_mps,
-        driven_m=dry,
-        breaker_hazard=per_hit,
-    )
 
 
 def _source(mission: Mission) -> dict:
