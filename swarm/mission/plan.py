@@ -896,7 +896,9 @@ def _budget(mission: Mission, plan: MissionPlan) -> dict:
         after_losses = budget.p_criterion_met(criterion, mines, after, poisson=random_count)
         s.design["p_criterion_met"] = as_planned
         if task.mark and task.clearance is not None:
-            markers += mines * after  # each mine found is marked by a robot the clearance expends
+            # the reserves mark the mines found (a searcher never leaves its track to), and the
+            # clearance expends its markers
+            markers += min(mines * after, s.design["reserves"])
         searches[s.task] = {
             "criterion": criterion,
             "expected_detection": s.expected_detection,

@@ -67,12 +67,13 @@ def test_with_no_hazards_the_simulation_finds_what_the_plan_expects(name: str) -
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("name", ["landing", "recon", "relay"])
+@pytest.mark.parametrize("name", ["landing", "recon", "relay", "mine_clear", "full_conops"])
 def test_the_robots_lost_in_each_phase_are_the_plan_s_expected_losses(name: str) -> None:
-    """32 runs of the shipped mission with its own plan and hazards: in every phase (sea, surf,
+    """32 runs of each shipped mission with its own plan and hazards: in every phase (sea, surf,
     beach, return) the mean number lost a run is within three standard errors plus 15% of the
     plan's expected losses. The plan once put 120 s of breakers on every robot, beach-launched
-    recon's too (1.2 robots where none is lost) and relay's 4.0 where 0.8 are."""
+    recon's too (1.2 robots where none is lost) and relay's 4.0 where 0.8 are, and left out the
+    return to sea (full_conops: 3.0 lost a run)."""
     mission = load_mission(MISSIONS / f"{name}.yaml")
     plan = plan_mission(mission, seed=mission.seed, workers=1)
     expected = {p: sum(c.values()) for p, c in plan.budget["expected_losses"].items()}
