@@ -95,9 +95,11 @@ def off_plan_driving(mission: Mission, cm: CostMap, plan: MissionPlan, ways: lis
         takers = takers or [k for k, rp in enumerate(plan.robots) if rp.role == "spare"] or searchers
         if not searchers or not takers:
             continue
-        # a trip from a taker's spot to a point of the tracks, over the ground the tracks cover
         track_total = sum(sum(ways[k].track_m.values()) for k in searchers)
-        points = np.vstack([plan.robots[k].track_m for k in searchers])
+        if track_total <= 0:
+            continue
+        # a trip from a taker's spot to a point of the tracks, over the ground the tracks cover
+        points = np.vstack([plan.robots[k].track_m.reshape(-1, 2) for k in searchers])
         spots = np.array([ways[k].last_m for k in takers])
         gaps = points[:, None, :] - spots[None, :, :]
         reach = float(np.hypot(gaps[..., 0], gaps[..., 1]).min(axis=1).mean())
@@ -114,11 +116,10 @@ def off_plan_driving(mission: Mission, cm: CostMap, plan: MissionPlan, ways: lis
             trips += early + sum(by_phase["beach"].values())
         if task.mark:
             trips += s.design["mines_expected"] * s.expected_detection  # one to each mine found
-        if track_total > 0:
-            for k in searchers:
-                for c, v in ways[k].track_m.items():
-                    metres[c] = metres.get(c, 0.0) + trips * reach * v / track_total
-            inside += trips * reach
+        for k in searchers:
+            for c, v in ways[k].track_m.items():
+                metres[c] = metres.get(c, 0.0) + trips * reach * v / track_total
+        inside += trips * reach
         share = {c: v / len(takers) for c, v in metres.items()}
         for k in takers:
             out[k] = (add_metres(out[k][0], share), out[k][1] + inside / len(takers))

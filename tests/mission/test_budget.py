@@ -280,3 +280,39 @@ def test_the_way_back_to_sea_uses_the_same_rates(mission, costmap) -> None:
         budget.return_losses(load_mission(MINE_CLEAR, {"phases.return_to_sea.enabled": False}), costmap, way)
         == {}
     )
+
+
+def _extras(overrides: dict) -> tuple[list, list]:
+    """Each robot's off-plan metres in mine_clear's plan, and its role."""
+    import shapely
+
+    from swarm.mission import exposure
+    from swarm.mission.plan import plan_mission
+
+    m = load_mission(MINE_CLEAR, overrides)
+    plan = plan_mission(m, seed=m.seed, workers=1)
+    cm = plan.costmap
+    heights = budget.surf_heights(m)
+    ashore = exposure.nearest_ashore(m, cm, heights > 0)
+    area = shapely.union_all(budget.mine_areas(m))
+    by_task = {s.task: s for s in plan.search}
+    ways = [exposure.way_in(m, cm, rp, heights, ashore, area, by_task) for rp in plan.robots]
+    return exposure.off_plan_driving(m, cm, plan, ways), [rp.role for rp in plan.robots]
+
+
+@pytest.mark.slow
+def test_reserves_drive_more_the_more_searchers_are_expected_lost() -> None:
+    """Off-plan driving goes to the search's reserves: with the robots failing four times as often
+    they take over more track. With no hazards the plan keeps no reserves, and the searchers
+    drive only to the mines they find, to mark them."""
+    fixed = {"swarm.count": 24, "tasks.0.track_spacing_m": 2.0}  # the same tracks
+    (base, roles), (worse, worse_roles), (calm, calm_roles) = (
+        _extras({**fixed, **more})
+        for more in ({}, {"hazards.attrition.mtbf_h": 2.5}, {"hazards.enabled": False})
+    )
+    total = [sum(sum(metres.values()) for metres, _ in extra) for extra in (calm, base, worse)]
+    assert 0 < total[0] < total[1] < total[2]
+    for extra, who in ((base, roles), (worse, worse_roles)):
+        assert "spare" in who
+        assert all(not metres for (metres, _), role in zip(extra, who, strict=True) if role == "search")
+    assert "spare" not in calm_roles
