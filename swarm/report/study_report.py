@@ -123,7 +123,7 @@ def runs_for_width(point: dict, width: float = WIDTH) -> object:
 def study_rows(summary: dict) -> list[list[str]]:
     """One row per parameter point: its swept values, runs, successes, success rate, Wilson interval,
     whether the interval's lower bound reaches the target, median time to success, mean robots lost
-    and the runs a ±0.05 interval would need."""
+    and the plan's expected losses, and the runs a ±0.05 interval would need."""
     keys = swept_keys(summary)
     confidence = summary.get("confidence", 0.95)
     target = _number(summary.get("target"))
@@ -138,6 +138,7 @@ def study_rows(summary: dict) -> list[list[str]]:
             "lower bound ≥ target",
             "median time to success (s)",
             "mean lost per run",
+            "plan's expected losses",
             f"runs for ±{WIDTH:g}",
         ]
     ]
@@ -159,6 +160,7 @@ def study_rows(summary: dict) -> list[list[str]]:
                 meets,
                 _fmt(median, ".0f"),
                 _fmt(p.get("lost_mean"), ".2f"),
+                _fmt(p.get("planned_lost"), ".2f"),
                 MISSING if needed is None else f"{needed:.0f}",
             ]
         )

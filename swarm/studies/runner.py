@@ -74,7 +74,7 @@ def run_task(task: RunTask) -> dict:
     started = time.perf_counter()
     mission, plan = _prepared(task.mission_path, task.overrides)
     log = simulate(mission, seed=task.seed, plan=plan, record_every_s=math.inf)
-    return _row(task, mission, log, time.perf_counter() - started)
+    return _row(task, mission, plan, log, time.perf_counter() - started)
 
 
 def run_batch(tasks: list[RunTask]) -> list[dict]:
@@ -95,10 +95,10 @@ def run_batch(tasks: list[RunTask]) -> list[dict]:
     setup = _setup(first.mission_path, first.overrides)
     logs = simulate_batch(mission, [t.seed for t in tasks], plan=plan, setup=setup, record_every_s=math.inf)
     share = (time.perf_counter() - started) / len(tasks)
-    return [_row(t, mission, log, share) for t, log in zip(tasks, logs, strict=True)]
+    return [_row(t, mission, plan, log, share) for t, log in zip(tasks, logs, strict=True)]
 
 
-def _row(task: RunTask, mission, log, runtime_s: float) -> dict:
+def _row(task: RunTask, mission, plan, log, runtime_s: float) -> dict:
     """One run's row of the results table."""
     row: dict = {"point": task.point, "run": task.run, "seed": task.seed}
     row.update(dict(task.overrides))
@@ -113,6 +113,8 @@ def _row(task: RunTask, mission, log, runtime_s: float) -> dict:
     row["lost"] = len(log.losses)
     for c in CAUSES:
         row[f"lost_{c}"] = causes.get(c, 0)
+    budget = plan.budget or {}
+    row["planned_lost"] = float(budget["expected_lost"]) if budget.get("hazards") else None
     row["losses"] = [loss_row(x) for x in log.losses]
     row["completed_s"] = None if log.completed_s is None else float(log.completed_s)
     row["duration_s"] = float(log.times_s[-1]) if len(log.times_s) else 0.0

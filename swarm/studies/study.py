@@ -192,6 +192,7 @@ def summarize(spec: StudySpec, table: pa.Table) -> dict:
     success = np.asarray(cols["success"], dtype=bool)
     completed = np.array([np.nan if v is None else v for v in cols["completed_s"]], dtype=np.float64)
     losses = cols["losses"]
+    planned = cols.get("planned_lost") or [None] * len(point_of)  # absent from older tables
     out_points = []
     for p, params in enumerate(spec.points()):
         mine = np.flatnonzero(point_of == p)
@@ -212,6 +213,7 @@ def summarize(spec: StudySpec, table: pa.Table) -> dict:
                 "losses_by_cause": by_cause,
                 "losses_by_phase": by_phase,
                 "lost_mean": float(np.mean([len(losses[i]) for i in mine])) if n else 0.0,
+                "planned_lost": next((planned[i] for i in mine if planned[i] is not None), None),
                 # total runs for a Wilson interval of ± h at the observed rate, and how many more
                 "runs_for_width": {f"{h:g}": _runs_for(rate, h, spec.confidence, n) for h in HALF_WIDTHS},
                 "more_runs_for_width": {

@@ -13,6 +13,9 @@ Columns, in order:
 - ``value_<criterion>`` (float64) and ``met_<criterion>`` (bool) for each criterion the mission
   has (landing, detection, relay, surveillance, beacon, recovered; null/False where absent).
 - ``lost`` (int32) and ``lost_<cause>`` (int32) for each cause of `swarm.sim.hazards.CAUSES`.
+- ``planned_lost`` (float64): the robots the point's plan expects to lose (its budget's
+  ``expected_lost``, the same in each of the point's rows), to set beside ``lost``; null with the
+  hazards off, and in tables written before it existed.
 - ``losses`` (list of struct cause: string, phase: string, t_s: float64, x_m: float64,
   y_m: float64): every loss, for loss maps and losses by phase.
 - ``completed_s`` (float64): mission time when every criterion was first met; null if never.
@@ -64,6 +67,7 @@ def schema(sweep_types: Sequence[tuple[str, pa.DataType]]) -> pa.Schema:
         fields += [pa.field(f"value_{c}", pa.float64()), pa.field(f"met_{c}", pa.bool_())]
     fields += [pa.field("lost", pa.int32())]
     fields += [pa.field(f"lost_{c}", pa.int32()) for c in CAUSES]
+    fields += [pa.field("planned_lost", pa.float64())]
     fields += [
         pa.field("losses", pa.list_(LOSS)),
         pa.field("completed_s", pa.float64()),

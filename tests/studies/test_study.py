@@ -457,3 +457,28 @@ def test_a_ray_worker_killed_mid_study_is_retried_to_the_same_table(reference, t
     assert killed, "no Ray worker was running a run to kill"
     assert summary["runs"] == 10
     assert _stable(table).equals(_stable(expected))
+
+
+def test_each_point_carries_its_plan_s_expected_losses(tmp_path) -> None:
+    """Every row of a point holds the expected losses of the plan its runs followed (the plan the
+    study makes for that point, with the mission's seed), and the summary sets it beside the mean
+    lost; with the hazards off there is none."""
+    from swarm.mission.load import load_mission
+    from swarm.mission.plan import plan_mission
+
+    path = str(REPO / "missions" / "landing.yaml")
+    spec = StudySpec(
+        path, runs=2, sweeps=parse_sweeps(["swarm.count=10,12", "hazards.enabled=true,false"]), seed=1
+    )
+    table, summary = run_study(spec, tmp_path / "study", workers=1)
+    cols = table.to_pydict()
+    for p, point in enumerate(summary["points"]):
+        params = point["params"]
+        rows = [cols["planned_lost"][i] for i in range(table.num_rows) if cols["point"][i] == p]
+        if not params["hazards.enabled"]:
+            assert rows == [None, None] and point["planned_lost"] is None
+            continue
+        m = load_mission(path, params)
+        expected = plan_mission(m, seed=m.seed, workers=1).budget["expected_lost"]
+        assert rows == [pytest.approx(expected)] * 2
+        assert point["planned_lost"] == pytest.approx(expected)
