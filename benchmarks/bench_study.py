@@ -377,16 +377,21 @@ def _unpack(ref: str, dest: Path) -> None:
 
 
 def _differing_runs(a: pa.Table, b: pa.Table) -> list[int]:
-    """The `run` numbers of the rows in which two tables of the same runs differ."""
-    rows_a = {r["run"]: r for r in a.to_pylist()}
-    return sorted(r["run"] for r in b.to_pylist() if rows_a.get(r["run"]) != r)
+    """The `run` numbers of the rows in which two tables of the same runs differ (in the columns
+    both have)."""
+    shared = [name for name in a.column_names if name in b.column_names]
+    rows_a = {r["run"]: r for r in a.select(shared).to_pylist()}
+    return sorted(r["run"] for r in b.select(shared).to_pylist() if rows_a.get(r["run"]) != r)
 
 
 def _differences(a: pa.Table, b: pa.Table) -> list[str]:
-    """Columns in which two tables differ (schema or values)."""
-    if a.schema != b.schema or a.num_rows != b.num_rows:
-        return ["(schema or row count)"]
-    return [name for name in a.column_names if not a.column(name).equals(b.column(name))]
+    """Columns in which two tables differ: values in the columns both have (an older commit's table
+    lacks the columns added since: named as such), or the row count."""
+    if a.num_rows != b.num_rows:
+        return ["(row count)"]
+    shared = [name for name in a.column_names if name in b.column_names]
+    only = [f"{name} (one table only)" for name in (*a.column_names, *b.column_names) if name not in shared]
+    return [name for name in shared if not a.column(name).equals(b.column(name))] + only
 
 
 def main(argv: list[str] | None = None) -> None:
