@@ -5,7 +5,8 @@ Expected losses (`robot_losses`). Each robot's exposure (time at sea, in the sur
 driven on each terrain class and inside the mine area) meets the mission's hazard rates, the same
 rates the simulator draws from (`swarm.sim.hazards`):
 
-- failure: 1 - exp(-t / MTBF) over the time from release to the end of the task window;
+- failure: 1 - exp(-t / MTBF) over the time from release to the end of the task window (what
+  the search's design counts on; the losses the plan reports run to the end of beach operations);
 - wave impact: 1 - prod(1 - p_hit), one breaker a wave period T while in the surf zone, each
   disabling with `SurfHazard.damage_probability` at the local breaker height where it hits
   (`swarm.world.coastal.local_breaker_height`, as the simulator's hazards); the time in the surf is
