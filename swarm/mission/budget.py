@@ -296,6 +296,14 @@ def expected_by_cause(
     return out
 
 
+def track_left(losses: dict[str, dict[str, float]]) -> float:
+    """The share of a searcher's track it is expected to leave undriven: all of it when lost on the
+    way in (at sea, in the surf), about half when lost on it at a steady rate."""
+    by_phase = expected_by_cause(losses)
+    early = sum(sum(by_phase[p].values()) for p in ("sea", "surf"))
+    return early + sum(by_phase["beach"].values()) / 2.0
+
+
 def lost_probability(losses: dict[str, dict[str, float]], phases: tuple[str, ...] = PHASE_NAMES) -> float:
     """P(lost in any of `phases`), the causes independent."""
     survive = 1.0

@@ -107,13 +107,12 @@ def off_plan_driving(mission: Mission, cm: CostMap, plan: MissionPlan, ways: lis
         metres: dict[str, float] = {}
         inside = 0.0
         for k in searchers:
-            by_phase = budget.expected_by_cause(budget.robot_losses(mission, cm, ways[k].exposure))
-            early = sum(sum(by_phase[p].values()) for p in ("sea", "surf"))
-            left = early + sum(by_phase["beach"].values()) / 2.0  # of its track, on average
+            losses = budget.robot_losses(mission, cm, ways[k].exposure)
+            left = budget.track_left(losses)
             for c, v in ways[k].track_m.items():
                 metres[c] = metres.get(c, 0.0) + left * v
             inside += left * ways[k].track_inside_m
-            trips += early + sum(by_phase["beach"].values())
+            trips += budget.lost_probability(losses)
         if task.mark:
             trips += s.design["mines_expected"] * s.expected_detection  # one to each mine found
         for k in searchers:

@@ -826,11 +826,12 @@ def _budget(mission: Mission, plan: MissionPlan) -> dict:
         places = back.points or [tuple(rp.launch_m) for rp in plan.robots]
         pickups = np.unique(np.array([place_xy(plan.beach_map, p) for p in places], np.float64), axis=0)
     lost_by_task: dict[str, float] = {}
-    robot_s_by_task: dict[str, float] = {}
+    orphaned_s: dict[str, float] = {}  # search time lost searchers leave undone
+    spare_s: dict[str, float] = {}  # time the others have for it: reserves, searchers done early
     unseen_blasts = 0.0  # mines expected to go off before any sensor found them
     ways = [exposure.way_in(mission, cm, rp, heights, ashore, mine_area, by_task) for rp in plan.robots]
     extra = exposure.off_plan_driving(mission, cm, plan, ways)
-    for way, (more_m, more_inside) in zip(ways, extra, strict=True):
+    for rp, way, (more_m, more_inside) in zip(plan.robots, ways, extra, strict=True):
         exposed = dataclasses.replace(
             way.exposure,
             driven_m=exposure.add_metres(way.exposure.driven_m, more_m),
@@ -861,7 +862,12 @@ def _budget(mission: Mission, plan: MissionPlan) -> dict:
             task = way.search.task
             lost_by_task[task] = lost_by_task.get(task, 0.0) + lost
             span = max(way.window_end_s - way.arrive_s, 0.0)
-            robot_s_by_task[task] = robot_s_by_task.get(task, 0.0) + span * (1.0 - lost / 2.0)
+            run_s = way.search.design["search_time_s"]
+            if rp.role == "search":  # its track left undone if it is lost, its slack if it is not
+                orphaned_s[task] = orphaned_s.get(task, 0.0) + budget.track_left(losses) * run_s
+                spare_s[task] = spare_s.get(task, 0.0) + (1.0 - lost) * max(span - run_s, 0.0)
+            else:  # a reserve, while it lasts
+                spare_s[task] = spare_s.get(task, 0.0) + span * (1.0 - lost / 2.0)
     criterion = mission.success.min_detection_fraction
     searches = {}
     markers = 0.0
@@ -886,9 +892,15 @@ def _budget(mission: Mission, plan: MissionPlan) -> dict:
                 ground=cm,
             )
         need = s.design["searchers"] * s.design["search_time_s"]
-        capacity = robot_s_by_task.get(s.task, 0.0)
+        undone = max(orphaned_s.get(s.task, 0.0) - spare_s.get(s.task, 0.0), 0.0)
+        share = min(undone / need, 1.0) if need > 0 else 0.0
+        # a strip whose track is left undone is swept by its neighbours' sensors, twice as far off
+        width = s.sweep_width_m
+        kept = budget.nominal_detection(model, width, 2 * s.spacing_m) / budget.nominal_detection(
+            model, width, s.spacing_m
+        )
         mines = s.design["mines_expected"]
-        after = s.expected_detection * min(1.0, capacity / need if need > 0 else 1.0)
+        after = s.expected_detection * (1.0 - share * (1.0 - kept))
         if mines > 0:
             after = max(0.0, after - unseen_blasts / mines)
         random_count = budget.mine_count_is_random(mission)
