@@ -101,8 +101,7 @@ def off_plan_driving(mission: Mission, cm: CostMap, plan: MissionPlan, ways: lis
         # a trip from a taker's spot to a point of the tracks, over the ground the tracks cover
         points = np.vstack([plan.robots[k].track_m.reshape(-1, 2) for k in searchers])
         spots = np.array([ways[k].last_m for k in takers])
-        gaps = points[:, None, :] - spots[None, :, :]
-        reach = float(np.hypot(gaps[..., 0], gaps[..., 1]).min(axis=1).mean())
+        reach = float(cKDTree(spots).query(points)[0].mean())
         trips = 0.0
         metres: dict[str, float] = {}
         inside = 0.0
