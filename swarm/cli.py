@@ -671,10 +671,9 @@ def _cmd_plan(args: argparse.Namespace) -> int:
                 f"({evaluation['wilson_low']:.2f} to {evaluation['wilson_high']:.2f}), "
                 f"target {evaluation['target']:g}"
             ]
-            budget = plan.budget or {}
-            if budget.get("hazards"):
+            if plan.expected_lost is not None:
                 said.append(
-                    f"{evaluation['lost']['mean']:.1f} robots lost a run (plan {budget['expected_lost']:.1f})"
+                    f"{evaluation['lost']['mean']:.1f} robots lost a run (plan {plan.expected_lost:.1f})"
                 )
             if evaluation.get("suggested_count"):
                 said.append(f"suggested size {evaluation['suggested_count']}")

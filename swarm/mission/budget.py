@@ -196,6 +196,18 @@ def driven_by_class(
     return out, inside
 
 
+def ground_speed(mission: Mission, speed_mps: float | None) -> float:
+    """A robot's ground speed in the mine area: `speed_mps`, else the cruise wheel speed."""
+    return mission.robot.wheel_speed_mps if speed_mps is None else speed_mps
+
+
+def unseen_share(mission: Mission, speed_mps: float | None) -> float:
+    """Of the mines expected to go off under a robot driving at `speed_mps`, the share that no
+    sensor had found: most were found a moment before, too late to turn, and count as detected."""
+    late = undetected_at_contact(mission, ground_speed(mission, speed_mps))
+    return undetected_at_contact(mission) / late if late > 0 else 1.0
+
+
 def undetected_at_contact(mission: Mission, speed_mps: float = 0.0) -> float:
     """Chance the search sensor has not found a mine in time for a robot driving at it at
     `speed_mps` to keep off it (module docstring)."""
@@ -256,7 +268,7 @@ def robot_losses(mission: Mission, cm: CostMap, exposure: Exposure) -> dict[str,
     if n_mines > 0 and areas:
         density = n_mines / shapely.union_all(areas).area
         met = density * 2 * TRIGGER_RADIUS_M * exposure.in_mine_area_m
-        speed = mission.robot.wheel_speed_mps if exposure.speed_mps is None else exposure.speed_mps
+        speed = ground_speed(mission, exposure.speed_mps)
         rate = met * undetected_at_contact(mission, speed) * hz.mines.trigger_probability
         out["beach"]["mine"] = -math.expm1(-rate)
     return {p: {c: v for c, v in d.items() if v > 0} for p, d in out.items()}

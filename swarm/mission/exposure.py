@@ -45,11 +45,15 @@ class WayIn:
     track_inside_m: float  # of which in the mine area
 
 
+def _dry(mission: Mission, by_class: dict[str, float]) -> dict[str, float]:
+    """Metres by class, on the classes that are not water."""
+    return {c: v for c, v in by_class.items() if not mission.terrain_library[c].is_water}
+
+
 def way_in(mission: Mission, cm: CostMap, rp: RobotPlan, heights, ashore, mine_area, by_task) -> WayIn:
     """Robot `rp`'s exposure along its planned route: the swim, the surf along the sea leg and the
     ground path (a spare swims from its entry to the nearest dry ground, where the simulator's
     robots wait out of the breakers), and its ground route until its task's window ends."""
-    lib = mission.terrain_library
     swim = mission.robot.swim_speed_mps
     sea_leg = rp.sea_leg_m.reshape(-1, 2)
     on = rp.ground_m.reshape(-1, 2) if len(rp.ground_m) else ashore(sea_leg[-1])
@@ -68,16 +72,15 @@ def way_in(mission: Mission, cm: CostMap, rp: RobotPlan, heights, ashore, mine_a
         sea_s=max(rp.sea_time_s - leg_surf_m / swim, 0.0),
         surf_s=surf_m / swim,
         beach_s=max(end - ashore_s, 0.0),
-        driven_m={c: v for c, v in driven.items() if not lib[c].is_water},
+        driven_m=_dry(mission, driven),
         in_mine_area_m=inside,
         breaker_hazard=per_hit,
         speed_mps=speed,
-        beach_surf_s=wet_m / (speed or mission.robot.wheel_speed_mps),
+        beach_surf_s=wet_m / budget.ground_speed(mission, speed),
         beach_breaker_hazard=wet_hit,
     )
     last = (land if len(land) else on)[-1]
-    dry = {c: v for c, v in track.items() if not lib[c].is_water}
-    return WayIn(exposure, search, arrive, ashore_s, end, last, dry, track_inside)
+    return WayIn(exposure, search, arrive, ashore_s, end, last, _dry(mission, track), track_inside)
 
 
 def off_plan_driving(mission: Mission, cm: CostMap, plan: MissionPlan, ways: list[WayIn]) -> list:
@@ -134,11 +137,9 @@ def way_back(
 ) -> budget.Exposure:
     """The way back to sea from `start`: a straight drive to the nearest pick-up point and the swim
     out through the surf on it."""
-    lib = mission.terrain_library
     way = np.vstack([start, pickups[np.argmin(np.hypot(*(pickups - start).T))]])
     surf_m, per_hit = budget.surf_crossing(mission, cm, way, heights)
-    driven, _ = budget.driven_by_class(cm, way, None)
-    dry = {c: v for c, v in driven.items() if not lib[c].is_water}
+    dry = _dry(mission, budget.driven_by_class(cm, way, None)[0])
     return budget.Exposure(
         sea_s=0.0,
         surf_s=surf_m / mission.robot.swim_speed_mps,

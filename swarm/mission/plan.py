@@ -166,6 +166,11 @@ class MissionPlan:
     budget: dict = field(default_factory=dict)
 
     @property
+    def expected_lost(self) -> float | None:
+        """Robots the plan expects to lose (`budget`), None with the hazards off."""
+        return float(self.budget["expected_lost"]) if self.budget.get("hazards") else None
+
+    @property
     def expected_coverage(self) -> float | None:
         """Area-weighted expected detection fraction over the search tasks (None without search)."""
         if not self.search:
@@ -851,12 +856,7 @@ def _budget(mission: Mission, plan: MissionPlan) -> dict:
             home = exposure.way_back(mission, cm, way.last_m, pickups, heights)
             for cause, p in budget.return_losses(mission, cm, home).items():
                 way_back[cause] = way_back.get(cause, 0.0) + still * p
-        if blast := expected["beach"].get("mine", 0.0):
-            # most mines that go off were found a moment before (too late to turn): those count
-            # as detected; the rest were never seen
-            speed = exposed.speed_mps if exposed.speed_mps is not None else mission.robot.wheel_speed_mps
-            late = budget.undetected_at_contact(mission, speed)
-            unseen_blasts += blast * (budget.undetected_at_contact(mission) / late if late > 0 else 1.0)
+        unseen_blasts += expected["beach"].get("mine", 0.0) * budget.unseen_share(mission, exposed.speed_mps)
         if way.search is not None:
             lost = budget.lost_probability(losses)
             task = way.search.task

@@ -19,6 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
+from swarm.mission import budget
 from swarm.mission.plan import MissionPlan
 from swarm.report import plan_figures as figs
 from swarm.report.document import MISSING, Figure, Report, Table, header, verdict
@@ -89,7 +90,7 @@ def _losses(d: dict) -> dict | None:
     if not b:
         return None
     # in mission order (plan.json sorts its keys)
-    order = {p: i for i, p in enumerate(("sea", "surf", "beach", "return"))}
+    order = {p: i for i, p in enumerate((*budget.PHASE_NAMES, budget.RETURN_PHASE))}
     phases = dict(sorted(b["expected_losses"].items(), key=lambda kv: order.get(kv[0], len(order))))
     return {"hazards": b.get("hazards", True), "by_phase": phases, "total": b["expected_lost"]}
 

@@ -113,8 +113,7 @@ def _row(task: RunTask, mission, plan, log, runtime_s: float) -> dict:
     row["lost"] = len(log.losses)
     for c in CAUSES:
         row[f"lost_{c}"] = causes.get(c, 0)
-    budget = plan.budget or {}
-    row["planned_lost"] = float(budget["expected_lost"]) if budget.get("hazards") else None
+    row["planned_lost"] = plan.expected_lost
     row["losses"] = [loss_row(x) for x in log.losses]
     row["completed_s"] = None if log.completed_s is None else float(log.completed_s)
     row["duration_s"] = float(log.times_s[-1]) if len(log.times_s) else 0.0
