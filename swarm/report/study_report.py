@@ -73,8 +73,10 @@ def answer(summary: dict) -> str:
     points = summary.get("points") or []
     if len(points) == 1:
         p = points[0]
+        held = ", ".join(required_value_text(k, v) for k, v in (p.get("params") or {}).items())
+        where = f" with {held}" if held else ""
         return (
-            f"{mission}: P(success) = {p['success_rate']:.3f} over {p['runs']} runs "
+            f"{mission}{where}: P(success) = {p['success_rate']:.3f} over {p['runs']} runs "
             f"({percent(confidence)} Wilson interval {p['wilson_low']:.3f} to {p['wilson_high']:.3f})"
         )
     return f"{mission}: no required value was computed for this study"

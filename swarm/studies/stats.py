@@ -254,7 +254,7 @@ def required_value(
     lower, _ = _wilson(k, n, z)
     order = np.argsort(v, kind="stable")
     reached = lower >= target
-    plural = f"{name}s"
+    plural = f"{name}s" if name.replace(" ", "").isalpha() else f"values of {name}"
     goal = f"{target:g} at {_pct(confidence)} confidence"
 
     hits = [int(i) for i in order if reached[i]]

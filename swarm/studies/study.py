@@ -256,8 +256,9 @@ def _loss_counts(per_run) -> tuple[dict[str, int], dict[str, dict[str, int]]]:
 
 def _required(spec: StudySpec, pts: list[dict]) -> dict | None:
     """The smallest value of the first swept numeric key reaching the target (others held at their
-    first value); None without a numeric sweep."""
-    numeric = [s for s in spec.sweeps if s.is_number]
+    first value); None without a numeric sweep of two values or more (a `--set` is a sweep of one
+    value: a key held, not a question of how much)."""
+    numeric = [s for s in spec.sweeps if s.is_number and len(s.values) > 1]
     if not numeric:
         return None
     key = numeric[0].key

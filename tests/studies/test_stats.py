@@ -225,6 +225,12 @@ def test_required_value_none_reaches_names_the_best() -> None:
     assert "will not help" in answer.note
 
 
+def test_required_value_names_a_key_s_values_in_the_plural() -> None:
+    answer = required_value([1.0, 2.0], [0, 1], [40, 40], target=0.95, name="hazards.attrition.mtbf_h")
+    assert answer.note.startswith("none of the swept values of hazards.attrition.mtbf_h reaches 0.95")
+    assert answer.note.endswith("sweep larger values of hazards.attrition.mtbf_h")
+
+
 def test_required_value_none_reaches_suggests_runs() -> None:
     # 58/60 observed (0.967) but the lower bound is only 0.886: more runs at 60 would settle it
     answer = required_value([50, 60], [50, 58], [60, 60], target=0.95)

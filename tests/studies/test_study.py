@@ -482,3 +482,20 @@ def test_each_point_carries_its_plan_s_expected_losses(tmp_path) -> None:
         expected = plan_mission(m, seed=m.seed, workers=1).budget["expected_lost"]
         assert rows == [pytest.approx(expected)] * 2
         assert point["planned_lost"] == pytest.approx(expected)
+
+
+def test_a_held_key_is_no_sweep_and_the_answer_says_what_was_held(tiny, tmp_path, capsys) -> None:
+    """`--set` holds a key at one value: the study answers with the success rate at it, naming it,
+    not with "the smallest swept value" of a one-point sweep (nor advice to sweep it larger)."""
+    out = tmp_path / "held"
+    args = ["study", str(tiny), "--runs", "3", "--workers", "1", "--out", str(out)]
+    assert main([*args, "--set", "hazards.attrition.mtbf_h=0.01", "--set", "swarm.count=2"]) == 0
+    first = capsys.readouterr().out.splitlines()[0]
+    summary = json.loads((out / "summary.json").read_text())
+    point = summary["points"][0]
+    assert summary["required"] is None
+    assert first == (
+        f"tiny with hazards.attrition.mtbf_h = 0.01, 2 robots: P(success) = {point['success_rate']:.3f} "
+        f"over 3 runs (95% Wilson interval {point['wilson_low']:.3f} to {point['wilson_high']:.3f})"
+    )
+    assert "swept" not in first
