@@ -31,7 +31,9 @@ Search design (`design_search`). The search must be over before its window close
 clearance less the time to clear the standoff and to bring markers onto the mines found, or the end
 of beach operations. With `track_spacing_m` unset the spacing is the widest whose expected
 detection gives the success criterion with the task's `detection_confidence` (0.95 by default; the
-detected fraction of N mines is binomial), unless the robots cannot drive that much track in the
+detected fraction of N mines is binomial; the detection of parallel tracks is Koopman's formula
+for the sensor's model, or, for a tabulated lateral-range curve, that curve's own parallel sweep,
+`parallel_sweep_detection`), unless the robots cannot drive that much track in the
 window (less the searcher time the losses are expected to cost), in which case it is the tightest
 they can. As many robots search
 as that spacing needs; of the others, as many as the losses are expected to take wait as reserves
@@ -53,7 +55,7 @@ from scipy.special import erf
 from scipy.stats import binom
 from shapely.geometry.base import BaseGeometry
 
-from swarm.mission.schema import DETECTION_CONFIDENCE, Mission
+from swarm.mission.schema import DETECTION_CONFIDENCE, LateralRange, Mission
 from swarm.planning import CostMap
 from swarm.world.coastal import local_breaker_height, surf_zone_mask
 
@@ -372,6 +374,7 @@ class SearchDesign:
         spacing_m: float,
         expected: float,
         before: tuple[float, float] | None = None,
+        curve: LateralRange | None = None,
     ) -> float | None:
         """A tighter spacing when the tracks laid at `spacing_m` are expected to find `expected`,
         short of the target: the ground and the edges cost expected / nominal of Koopman's formula,
@@ -383,12 +386,12 @@ class SearchDesign:
             return None
         if spacing_m <= self.min_spacing_m * 1.001:
             return None
-        kept = expected / max(nominal_detection(model, width_m, spacing_m), 1e-9)
+        kept = expected / max(nominal_detection(model, width_m, spacing_m, curve), 1e-9)
         want = min(self.target_detection / max(kept, 1e-9), 1.0 - 1e-9)
         lo = self.min_spacing_m
-        if nominal_detection(model, width_m, lo) < want:
+        if nominal_detection(model, width_m, lo, curve) < want:
             return lo
-        gap = lambda s: nominal_detection(model, width_m, s) - want  # noqa: E731
+        gap = lambda s: nominal_detection(model, width_m, s, curve) - want  # noqa: E731
         tighter = spacing_m if gap(spacing_m) >= 0 else float(optimize.brentq(gap, lo, spacing_m))
         # A definite-range sensor's formula saturates at S = W (it promises everything already), so
         # it cannot say how much tighter; the shortfall is at edges and blocked ground, and closing
@@ -464,14 +467,35 @@ def mine_count_is_random(mission: Mission) -> bool:
     return mission.hazards.mines.count is None
 
 
-def nominal_detection(model: str, width_m: float, spacing_m: float) -> float:
-    """Koopman's detection for parallel tracks (`coverage.detection_probability`'s formulas)."""
+def nominal_detection(
+    model: str, width_m: float, spacing_m: float, curve: LateralRange | None = None
+) -> float:
+    """Koopman's detection for parallel tracks (`coverage.detection_probability`'s formulas); with
+    a tabulated lateral-range `curve`, that curve's parallel sweep (`parallel_sweep_detection`):
+    the cookie cutter's min(1, W/S) at the curve's W promises everything from S = W on, where the
+    curve's tails still leave mines between the tracks."""
+    if curve is not None:
+        return parallel_sweep_detection(curve, spacing_m)
     r = width_m / spacing_m
     if model == "cookie_cutter":
         return min(1.0, r)
     if model == "inverse_cube":
         return float(erf(math.sqrt(math.pi) / 2.0 * r))
     return -math.expm1(-r)
+
+
+def parallel_sweep_detection(curve: LateralRange, spacing_m: float, samples: int = 2048) -> float:
+    """Detection by infinitely many parallel tracks `spacing_m` apart of a sensor with the lateral-
+    range curve p (Washburn, Search and Detection, ch. 2): the mean over a mine's offset x from a
+    track of 1 - prod_k (1 - p(|x + kS|)), one independent draw per track passed, as the simulator
+    draws once per pass (`swarm.sim.sensing`). Midpoint rule over x in [0, S)."""
+    r = np.asarray(curve.range_m, dtype=np.float64)
+    p = np.asarray(curve.probability, dtype=np.float64)
+    reach = math.ceil(float(r[-1]) / spacing_m) + 1
+    x = (np.arange(samples) + 0.5) / samples * spacing_m
+    offsets = np.abs(x[:, None] + spacing_m * np.arange(-reach, reach + 1)[None, :])
+    miss = np.prod(1.0 - np.interp(offsets, r, p, right=0.0), axis=1)
+    return float(1.0 - miss.mean())
 
 
 def design_search(
@@ -502,6 +526,7 @@ def design_search(
     )
     model = "random" if task.sensor.model == "random_search" else task.sensor.model
     w = task.sensor.width_m
+    curve = task.sensor.lateral_range
     overhead = 1.0 + TURN_S * speed_mps / max(row_m, 1.0)
     # searcher time the losses are expected to cost (a lost searcher has driven half its run)
     kept = 1.0 - loss_before_end / 2.0
@@ -515,14 +540,16 @@ def design_search(
         spacing, source = task.track_spacing_m, "mission"
     else:
         source = "planned"
-        if nominal_detection(model, w, MIN_SPACING_FRACTION * w) * reach < target:
+        if nominal_detection(model, w, MIN_SPACING_FRACTION * w, curve) * reach < target:
             wanted = MIN_SPACING_FRACTION * w
             note = f"no spacing reaches the {target:.1%} the criterion needs: the ground allows {reach:.1%}"
-        elif nominal_detection(model, w, 2 * w) * reach >= target:
+        elif nominal_detection(model, w, 2 * w, curve) * reach >= target:
             wanted = 2 * w
         else:
             wanted = optimize.brentq(
-                lambda s: nominal_detection(model, w, s) * reach - target, MIN_SPACING_FRACTION * w, 2 * w
+                lambda s: nominal_detection(model, w, s, curve) * reach - target,
+                MIN_SPACING_FRACTION * w,
+                2 * w,
             )
         spacing = max(wanted, fits(robots))
         if spacing > wanted:

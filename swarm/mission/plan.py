@@ -613,7 +613,7 @@ def _plan_search(
             mine_area, drivable_segments(driven, cm), model, width, table, ground=cm
         )
         laid = (spacing, expected)
-        spacing = design.tighten(model, width, spacing, expected, before)
+        spacing = design.tighten(model, width, spacing, expected, before, task.sensor.lateral_range)
         before = laid
     spacing = design.spacing_m
     run_s = design.run_time_s(polygon.area, spacing)
@@ -621,7 +621,7 @@ def _plan_search(
     design_out.update(
         spacing_m=spacing,
         search_time_s=run_s,
-        nominal_detection=budget.nominal_detection(model, width, spacing),
+        nominal_detection=budget.nominal_detection(model, width, spacing, task.sensor.lateral_range),
         reachable_detection=reach,
         p_criterion_met=budget.p_criterion_met(
             mission.success.min_detection_fraction,
@@ -895,9 +895,9 @@ def _budget(mission: Mission, plan: MissionPlan) -> dict:
         undone = max(orphaned_s.get(s.task, 0.0) - spare_s.get(s.task, 0.0), 0.0)
         share = min(undone / need, 1.0) if need > 0 else 0.0
         # a strip whose track is left undone is swept by its neighbours' sensors, twice as far off
-        width = s.sweep_width_m
-        kept = budget.nominal_detection(model, width, 2 * s.spacing_m) / budget.nominal_detection(
-            model, width, s.spacing_m
+        width, curve = s.sweep_width_m, task.sensor.lateral_range
+        kept = budget.nominal_detection(model, width, 2 * s.spacing_m, curve) / budget.nominal_detection(
+            model, width, s.spacing_m, curve
         )
         mines = s.design["mines_expected"]
         after = s.expected_detection * (1.0 - share * (1.0 - kept))

@@ -10,6 +10,7 @@ import pytest
 from scipy.stats import binom
 
 from swarm.mission import budget, load_mission
+from swarm.mission.schema import LateralRange
 from swarm.planning import build_costmap
 
 MINE_CLEAR = "missions/mine_clear.yaml"
@@ -116,6 +117,39 @@ def test_extra_robots_tighten_the_search_then_cover_losses_then_shorten_it(missi
     assert huge.reserves == math.ceil(96 * 0.2)
     assert huge.search_time_s < big.search_time_s
     assert huge.spacing_m >= big.spacing_m - 1e-9
+
+
+@pytest.mark.parametrize("spacing", [1.0, 2.0, 3.0, 4.0, 6.0, 9.0])
+def test_a_tabulated_curve_s_parallel_sweep_is_koopman_s_for_his_curves(spacing: float) -> None:
+    """The parallel sweep of a tabulated curve is Koopman's closed form when the table is his
+    curve: a definite range gives min(1, W/S); the inverse cube, tabulated finely far out, gives
+    erf(sqrt(pi) W / (2 S)) (the table cut at 200 W keeps all but W / (800 pi) of W)."""
+    w = 4.0
+    definite = LateralRange(range_m=[0.0, w / 2, w / 2 + 1e-9], probability=[1.0, 1.0, 0.0])
+    assert budget.parallel_sweep_detection(definite, spacing, samples=20000) == pytest.approx(
+        min(1.0, w / spacing), abs=2e-4
+    )
+    x = np.concatenate([[0.0], np.geomspace(1e-3, 200 * w, 4000)])
+    cube = LateralRange(
+        range_m=x.tolist(), probability=(-np.expm1(-(w**2) / (4 * np.pi * np.maximum(x, 1e-9) ** 2))).tolist()
+    )
+    assert budget.parallel_sweep_detection(cube, spacing) == pytest.approx(
+        budget.nominal_detection("inverse_cube", w, spacing), abs=2e-3
+    )
+
+
+def test_nominal_detection_follows_the_sensor_s_own_curve() -> None:
+    """A curve whose tails overlap at S = W falls short of the cookie cutter's min(1, W/S) there; an
+    undone strip swept from twice the spacing keeps what the curve keeps (the plan's after-losses)."""
+    curve = LateralRange(range_m=[0.0, 0.5, 1.0, 1.5, 2.0], probability=[1.0, 0.95, 0.8, 0.4, 0.0])
+    w = 2.0 * np.trapezoid(curve.probability, curve.range_m)
+    assert w == pytest.approx(2.65)
+    at_w = budget.nominal_detection("cookie_cutter", w, w, curve)
+    assert at_w < budget.nominal_detection("cookie_cutter", w, w) - 0.05
+    # beyond twice the reach no mine sees two tracks: W / S exactly
+    assert budget.nominal_detection("cookie_cutter", w, 5.0, curve) == pytest.approx(w / 5.0, abs=1e-6)
+    # at 2S = 2.08 m a mine midway between two tracks sees both at 1.04 m: 1 - (1 - p(1.04))^2 < 1
+    assert budget.nominal_detection("cookie_cutter", w, 2.08, curve) < 0.97
 
 
 def test_unreachable_criterion_is_said(mission) -> None:

@@ -14,6 +14,7 @@ import pytest
 from scipy.spatial import cKDTree
 from shapely.geometry import box
 
+from swarm.mission.budget import parallel_sweep_detection
 from swarm.mission.schema import LateralRange, Sensor
 from swarm.planning.coverage import detection_probability
 from swarm.planning.detection import INVERSE_CUBE_FLOOR, inverse_cube_look
@@ -174,6 +175,31 @@ def test_a_lawnmower_reproduces_the_sweep_width_coverage(sensor: Sensor, spacing
     found = int(field.detected.sum())
     assert _binomial_ok(found, m, expected), (found / m, expected, formula)
     assert abs(found / m - formula) <= 4.0 * math.sqrt(formula * (1 - formula) / m) + 0.01
+
+
+@pytest.mark.parametrize("spacing", [2.0, 3.5, 8.0])
+def test_a_lawnmower_with_a_tabulated_curve_finds_the_planner_s_parallel_sweep(spacing: float) -> None:
+    """One draw per pass: tracks closer than the curve's reach each draw for a mine between them,
+    and the planner's `parallel_sweep_detection` says so (the cookie cutter's min(1, W/S) at the
+    curve's W would promise more wherever the tails overlap; at 8 m, beyond twice the reach, W/S)."""
+    m = 4000
+    rng = np.random.default_rng(3)
+    side = 100.0
+    field = MineField(rng.uniform(0.0, side, size=(m, 2)))
+    r = max_range_m(TABLE)
+    tracks_x = np.arange(-r - spacing, side + r + spacing, spacing) + 0.123
+    n = len(tracks_x)
+    ms = MineSensor(TABLE, field, n)
+    start = np.column_stack([tracks_x, np.full(n, -r - 1.0)])
+    _drive(ms, start, np.tile([0.0, 0.9], (n, 1)), math.ceil((side + 2 * r + 2) / 0.9), rng)
+    assert TABLE.lateral_range is not None
+    planned = parallel_sweep_detection(TABLE.lateral_range, spacing)
+    assert planned == pytest.approx(_truncated_sweep(TABLE, spacing), abs=1e-6)
+    if spacing >= 2 * r:
+        assert planned == pytest.approx(TABLE.width_m / spacing, abs=1e-6)
+    else:
+        assert planned < min(1.0, TABLE.width_m / spacing) - 0.01
+    assert _binomial_ok(int(field.detected.sum()), m, planned), (field.detected.mean(), planned)
 
 
 # false alarms ------------------------------------------------------------------------------------
