@@ -516,15 +516,21 @@ def _slots(
                 slots.extend(_Slot(task.type, label, p.copy()) for _ in range(task.robots_per_point))
 
     searches = [(t, task) for t, task in enumerate(mission.tasks) if task.type == "search"]
-    left = count - len(slots)
-    fixed = sum(task.robots for _, task in searches if task.robots is not None)
+    # the stations come first (each is a whole criterion); a search whose robots the rest cannot
+    # give is designed for the robots there are (more slots than robots would leave some of its
+    # tracks, or a station, unstaffed by the launch-to-slot assignment's distances)
+    left = max(0, count - len(slots))
+    given: dict[int, int] = {}
+    for t, task in searches:
+        if task.robots is not None:
+            given[t] = min(task.robots, left - sum(given.values()))
     open_tasks = [t for t, task in searches if task.robots is None]
-    share = max(0, left - fixed)
+    share = max(0, left - sum(given.values()))
     search_out: list[SearchPlan] = []
     for t, task in searches:
         label = mission.task_label(t)
         if task.robots is not None:
-            n = task.robots
+            n = given[t]
         else:
             i = open_tasks.index(t)
             n = share // len(open_tasks) + (1 if i < share % len(open_tasks) else 0)
@@ -535,6 +541,9 @@ def _slots(
         if keep_out:
             polygon = polygon.difference(shapely.union_all(keep_out))
         plan_out, search_slots = _plan_search(mission, task, label, polygon, n, free, launches)
+        if task.robots is not None and n < task.robots:
+            short = f"{n} of the {task.robots} robots asked: the rest hold the other tasks' stations"
+            plan_out.design["note"] = "; ".join(filter(None, [short, plan_out.design.get("note", "")]))
         search_out.append(plan_out)
         slots.extend(search_slots)
     return slots, search_out, relay_out

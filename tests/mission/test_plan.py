@@ -21,13 +21,13 @@ REPO = Path(__file__).resolve().parents[2]
 LANDING = REPO / "missions" / "landing.yaml"
 
 
-def _small_mixed():
+def _small_mixed(count: int = 9):
     """landing + relay (short radio range: relays needed) + beacon + search, on test_small."""
     raw = {
         "name": "small_mixed",
         "map": "../maps/test_small.yaml",
         "planner": "../planners/fast.yaml",
-        "swarm": {"count": 9},
+        "swarm": {"count": count},
         "launch": {"platform": "by_hand", "points": ["launch_1", "launch_2"], "offshore_m": 50},
         "tasks": [
             {"type": "landing", "zones": ["landing_a"], "robots_per_zone": 1},
@@ -185,3 +185,16 @@ def test_cli_bad_mission_exits_2(tmp_path, capsys):
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and err.startswith("swarm: error:")
     assert not (tmp_path / "o").exists()
+
+
+def test_a_swarm_short_of_its_tasks_staffs_every_station_and_searches_with_the_rest(mixed_plan):
+    """The stations are whole criteria: with fewer robots than the stations and the search's fixed
+    robots, every station keeps its robot and the search is designed, and said to be designed, for
+    the robots left (the launch-to-slot assignment used to leave whichever slots were farthest)."""
+    stations = [r.role for r in mixed_plan.robots if r.role not in ("search", "spare")]
+    plan = plan_mission(_small_mixed(count=len(stations) + 1), seed=1, workers=1)
+    roles = [r.role for r in plan.robots]
+    assert sorted(r for r in roles if r != "search") == sorted(stations)
+    (search,) = plan.search
+    assert roles.count("search") == search.design["searchers"] + search.design["reserves"] == 1
+    assert search.design["note"].startswith("1 of the 2 robots asked")
