@@ -498,6 +498,46 @@ def parallel_sweep_detection(curve: LateralRange, spacing_m: float, samples: int
     return float(1.0 - miss.mean())
 
 
+def undone_lane_kept(
+    model: str, width_m: float, spacing_m: float, curve: LateralRange | None = None, samples: int = 64
+) -> float:
+    """Of what a lane's strip is expected to find in an endless lattice of tracks `spacing_m` apart,
+    the share kept when that lane's track is never driven: the neighbours' sensors reach in from
+    both sides, and the neighbours' strips lose the undone track's help, which counts against it
+    too. The lattice with and without the lane, each detection law as the simulator draws it
+    (inverse-cube rates add, a curve draws once per pass, a definite range sees to W/2), integrated
+    across the lane's reach. (`nominal_detection(2S) / nominal(S)` is the average over the swept
+    and the unswept strips of every other lane undone: it keeps half of a cookie cutter's strip at
+    W = S, where an undone lane keeps none.)"""
+    if model == "inverse_cube" and curve is None:
+        lanes = 60  # the rate falls as 1/x^2: beyond 60 lanes it adds < W^2 / (240 pi S^2) a metre
+    else:
+        reach = float(curve.range_m[-1]) if curve is not None else width_m / 2.0
+        lanes = math.ceil(reach / spacing_m) + 1
+    k = np.arange(-lanes - 1, lanes + 2)
+    y = (np.arange((2 * lanes + 1) * samples) + 0.5) / samples * spacing_m - (lanes + 0.5) * spacing_m
+    d = np.abs(y[:, None] - k[None, :] * spacing_m)
+    own = k == 0
+    if model == "inverse_cube" and curve is None:
+        rate = width_m**2 / (4.0 * math.pi) / np.maximum(d, 1e-6) ** 2
+        full, without = -np.expm1(-rate.sum(axis=1)), -np.expm1(-rate[:, ~own].sum(axis=1))
+    else:
+        if curve is not None:
+            p = np.interp(
+                d, np.asarray(curve.range_m, np.float64), np.asarray(curve.probability, np.float64), right=0.0
+            )
+        else:
+            p = (d <= width_m / 2.0).astype(np.float64)
+        full = 1.0 - np.prod(1.0 - p, axis=1)
+        without = 1.0 - np.prod(1.0 - p[:, ~own], axis=1)
+    strip = np.abs(y) < spacing_m / 2.0
+    nominal = float(full[strip].mean())
+    if nominal <= 0.0:
+        return 1.0
+    lost = float((full - without).sum()) / samples  # in lanes' widths
+    return float(min(max(1.0 - lost / nominal, 0.0), 1.0))
+
+
 def design_search(
     mission: Mission,
     task,

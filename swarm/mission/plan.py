@@ -903,11 +903,9 @@ def _budget(mission: Mission, plan: MissionPlan) -> dict:
         need = s.design["searchers"] * s.design["search_time_s"]
         undone = max(orphaned_s.get(s.task, 0.0) - spare_s.get(s.task, 0.0), 0.0)
         share = min(undone / need, 1.0) if need > 0 else 0.0
-        # a strip whose track is left undone is swept by its neighbours' sensors, twice as far off
-        width, curve = s.sweep_width_m, task.sensor.lateral_range
-        kept = budget.nominal_detection(model, width, 2 * s.spacing_m, curve) / budget.nominal_detection(
-            model, width, s.spacing_m, curve
-        )
+        # a strip whose track is left undone keeps what its neighbours' sensors reach into it
+        lattice = "cookie_cutter" if model == "random" else model  # the sensor sees to a definite range
+        kept = budget.undone_lane_kept(lattice, s.sweep_width_m, s.spacing_m, task.sensor.lateral_range)
         mines = s.design["mines_expected"]
         after = s.expected_detection * (1.0 - share * (1.0 - kept))
         if mines > 0:

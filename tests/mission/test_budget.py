@@ -7,6 +7,7 @@ import math
 
 import numpy as np
 import pytest
+from scipy import integrate
 from scipy.stats import binom
 
 from swarm.mission import budget, load_mission
@@ -150,6 +151,36 @@ def test_nominal_detection_follows_the_sensor_s_own_curve() -> None:
     assert budget.nominal_detection("cookie_cutter", w, 5.0, curve) == pytest.approx(w / 5.0, abs=1e-6)
     # at 2S = 2.08 m a mine midway between two tracks sees both at 1.04 m: 1 - (1 - p(1.04))^2 < 1
     assert budget.nominal_detection("cookie_cutter", w, 2.08, curve) < 0.97
+
+
+@pytest.mark.parametrize("ratio", [0.8, 1.0, 1.25, 1.5, 2.0, 2.5])
+def test_an_undone_lane_keeps_what_its_neighbours_definite_range_reaches(ratio: float) -> None:
+    """Cookie cutter, W = ratio x S: the neighbours' tracks at +-S see the undone strip from
+    S - W/2 outward, so it keeps (W - S) / S of its detection, clipped to [0, 1]; the neighbours'
+    own strips lose nothing while W >= S."""
+    spacing = 2.0
+    kept = budget.undone_lane_kept("cookie_cutter", ratio * spacing, spacing)
+    assert kept == pytest.approx(min(1.0, max(0.0, ratio - 1.0)), abs=0.02)
+
+
+@pytest.mark.parametrize("spacing", [1.5, 2.2, 3.0])
+def test_an_undone_lane_keeps_what_the_inverse_cube_rates_of_the_others_give(spacing: float) -> None:
+    """Inverse cube, the lattice's rate in closed form: sum_k c / (y - kS)^2 = c pi^2 / (S^2
+    sin^2(pi y / S)), c = W^2 / (4 pi); without the undone lane, less c / y^2. The lost detection
+    integrated over y by scipy, over the lane's S times Koopman's erf(sqrt(pi) W / (2 S))."""
+    w = 3.0
+    c = w**2 / (4.0 * math.pi)
+
+    def lost(y: float) -> float:
+        full = c * (math.pi / spacing) ** 2 / math.sin(math.pi * y / spacing) ** 2
+        return math.exp(-(full - c / y**2)) - math.exp(-full)
+
+    total = sum(integrate.quad(lost, a, a + spacing, limit=200)[0] for a in spacing * np.arange(0.5, 80.0))
+    total += integrate.quad(lost, 1e-9, spacing / 2.0, limit=200)[0]
+    nominal = budget.nominal_detection("inverse_cube", w, spacing)
+    assert budget.undone_lane_kept("inverse_cube", w, spacing) == pytest.approx(
+        1.0 - 2.0 * total / (spacing * nominal), abs=0.01
+    )
 
 
 def test_unreachable_criterion_is_said(mission) -> None:
