@@ -408,7 +408,9 @@ class SearchTask(_Task):
     robots: int | None = Field(
         None,
         ge=1,
-        description="Robots searching. Default: every robot no other task holds.",
+        description="Robots searching. Default: every robot no other task holds. With fewer "
+        "robots than this and the other tasks' stations, the stations come first and the search "
+        "is planned for the robots left.",
     )
     mark: bool = Field(True, description="A robot loiters on each mine found to mark it. Default true.")
     clearance: Clearance | None = Field(
