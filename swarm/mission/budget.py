@@ -510,7 +510,7 @@ def undone_lane_kept(
     and the unswept strips of every other lane undone: it keeps half of a cookie cutter's strip at
     W = S, where an undone lane keeps none.)"""
     if model == "inverse_cube" and curve is None:
-        lanes = 60  # the rate falls as 1/x^2: beyond 60 lanes it adds < W^2 / (240 pi S^2) a metre
+        lanes = 60  # the rate falls as 1/x^2: the lanes beyond add at most W^2 / (120 pi S^2) to it
     else:
         reach = float(curve.range_m[-1]) if curve is not None else width_m / 2.0
         lanes = math.ceil(reach / spacing_m) + 1
