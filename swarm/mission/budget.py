@@ -222,8 +222,7 @@ def undetected_at_contact(mission: Mission, speed_mps: float = 0.0) -> float:
         # a pass that closes on a mine draws down to its least distance (`swarm.sim.sensing`), an
         # offset uniform over the trigger radius for a mine the robot meets
         x = np.linspace(0.0, r, 65)
-        lr = sensor.lateral_range
-        return float(1.0 - np.interp(x, lr.range_m, lr.probability, right=0.0).mean())
+        return float(1.0 - lateral_range_p(sensor.lateral_range, x).mean())
     if sensor.model == "inverse_cube":
         d = r + REACTION_S * speed_mps
         return math.exp(-(sensor.width_m**2) / (16.0 * math.pi * d * d))
@@ -489,13 +488,28 @@ def parallel_sweep_detection(curve: LateralRange, spacing_m: float, samples: int
     range curve p (Washburn, Search and Detection, ch. 2): the mean over a mine's offset x from a
     track of 1 - prod_k (1 - p(|x + kS|)), one independent draw per track passed, as the simulator
     draws once per pass (`swarm.sim.sensing`). Midpoint rule over x in [0, S)."""
-    r = np.asarray(curve.range_m, dtype=np.float64)
-    p = np.asarray(curve.probability, dtype=np.float64)
-    reach = math.ceil(float(r[-1]) / spacing_m) + 1
+    reach = math.ceil(float(curve.range_m[-1]) / spacing_m) + 1
     x = (np.arange(samples) + 0.5) / samples * spacing_m
-    offsets = np.abs(x[:, None] + spacing_m * np.arange(-reach, reach + 1)[None, :])
-    miss = np.prod(1.0 - np.interp(offsets, r, p, right=0.0), axis=1)
-    return float(1.0 - miss.mean())
+    offsets = x[:, None] + spacing_m * np.arange(-reach, reach + 1)[None, :]
+    return float(_lattice_detection("cookie_cutter", 0.0, offsets, curve).mean())
+
+
+def lateral_range_p(curve: LateralRange, d: np.ndarray) -> np.ndarray:
+    """A tabulated lateral-range curve's detection probability at distances `d` abeam (linear
+    between its points, 0 beyond the last)."""
+    r = np.asarray(curve.range_m, dtype=np.float64)
+    return np.interp(np.abs(d), r, np.asarray(curve.probability, dtype=np.float64), right=0.0)
+
+
+def _lattice_detection(model: str, width_m: float, d: np.ndarray, curve: LateralRange | None) -> np.ndarray:
+    """Detection of a mine at each row of `d`, its distances (m) to the tracks passed, each law as
+    the simulator draws it: inverse-cube rates add, a curve draws once per pass, a definite range
+    sees to W/2."""
+    if model == "inverse_cube" and curve is None:
+        rate = width_m**2 / (4.0 * math.pi) / np.maximum(np.abs(d), 1e-6) ** 2
+        return -np.expm1(-rate.sum(axis=1))
+    p = lateral_range_p(curve, d) if curve is not None else (np.abs(d) <= width_m / 2.0).astype(np.float64)
+    return 1.0 - np.prod(1.0 - p, axis=1)
 
 
 def undone_lane_kept(
@@ -504,9 +518,8 @@ def undone_lane_kept(
     """Of what a lane's strip is expected to find in an endless lattice of tracks `spacing_m` apart,
     the share kept when that lane's track is never driven: the neighbours' sensors reach in from
     both sides, and the neighbours' strips lose the undone track's help, which counts against it
-    too. The lattice with and without the lane, each detection law as the simulator draws it
-    (inverse-cube rates add, a curve draws once per pass, a definite range sees to W/2), integrated
-    across the lane's reach. (`nominal_detection(2S) / nominal(S)` is the average over the swept
+    too. The lattice with and without the lane (`_lattice_detection`), integrated across the
+    lane's reach. (`nominal_detection(2S) / nominal(S)` is the average over the swept
     and the unswept strips of every other lane undone: it keeps half of a cookie cutter's strip at
     W = S, where an undone lane keeps none.)"""
     if model == "inverse_cube" and curve is None:
@@ -517,19 +530,8 @@ def undone_lane_kept(
     k = np.arange(-lanes - 1, lanes + 2)
     y = (np.arange((2 * lanes + 1) * samples) + 0.5) / samples * spacing_m - (lanes + 0.5) * spacing_m
     d = np.abs(y[:, None] - k[None, :] * spacing_m)
-    own = k == 0
-    if model == "inverse_cube" and curve is None:
-        rate = width_m**2 / (4.0 * math.pi) / np.maximum(d, 1e-6) ** 2
-        full, without = -np.expm1(-rate.sum(axis=1)), -np.expm1(-rate[:, ~own].sum(axis=1))
-    else:
-        if curve is not None:
-            p = np.interp(
-                d, np.asarray(curve.range_m, np.float64), np.asarray(curve.probability, np.float64), right=0.0
-            )
-        else:
-            p = (d <= width_m / 2.0).astype(np.float64)
-        full = 1.0 - np.prod(1.0 - p, axis=1)
-        without = 1.0 - np.prod(1.0 - p[:, ~own], axis=1)
+    full = _lattice_detection(model, width_m, d, curve)
+    without = _lattice_detection(model, width_m, d[:, k != 0], curve)
     strip = np.abs(y) < spacing_m / 2.0
     nominal = float(full[strip].mean())
     if nominal <= 0.0:

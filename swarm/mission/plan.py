@@ -661,11 +661,8 @@ def _plan_search(
 
 def _lateral_range(sensor):
     """The sensor's tabulated lateral-range curve as p(d), or None (the model's own curve)."""
-    if sensor.lateral_range is None:
-        return None
-    r = np.asarray(sensor.lateral_range.range_m, dtype=np.float64)
-    p = np.asarray(sensor.lateral_range.probability, dtype=np.float64)
-    return lambda d: np.interp(np.abs(d), r, p, right=0.0)
+    curve = sensor.lateral_range
+    return None if curve is None else (lambda d: budget.lateral_range_p(curve, d))
 
 
 def _class_fractions(cm: CostMap, polygon) -> dict[str, float]:

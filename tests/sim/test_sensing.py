@@ -146,6 +146,21 @@ def _truncated_sweep(sensor: Sensor, spacing: float) -> float:
     return float(1.0 - miss.mean())
 
 
+def _lawnmower_finds(sensor: Sensor, spacing: float, mines: int, seed: int) -> int:
+    """Mines found of `mines` uniform over a 100 m square by one robot per track, tracks north-south
+    at `spacing` reaching well past the field on every side."""
+    rng = np.random.default_rng(seed)
+    side = 100.0
+    field = MineField(rng.uniform(0.0, side, size=(mines, 2)))
+    r = max_range_m(sensor)
+    tracks_x = np.arange(-r - spacing, side + r + spacing, spacing) + 0.123
+    n = len(tracks_x)
+    ms = MineSensor(sensor, field, n)
+    start = np.column_stack([tracks_x, np.full(n, -r - 1.0)])
+    _drive(ms, start, np.tile([0.0, 0.9], (n, 1)), math.ceil((side + 2 * r + 2) / 0.9), rng)
+    return int(field.detected.sum())
+
+
 @pytest.mark.parametrize(
     ("sensor", "spacing", "model"),
     [
@@ -157,22 +172,12 @@ def _truncated_sweep(sensor: Sensor, spacing: float) -> float:
 )
 def test_a_lawnmower_reproduces_the_sweep_width_coverage(sensor: Sensor, spacing: float, model: str) -> None:
     m = 4000
-    rng = np.random.default_rng(2)
-    side = 100.0
-    field = MineField(rng.uniform(0.0, side, size=(m, 2)))
-    r = max_range_m(sensor)
-    # one robot per track, tracks north-south at spacing S reaching well past the field on every side
-    tracks_x = np.arange(-r - spacing, side + r + spacing, spacing) + 0.123
-    n = len(tracks_x)
-    ms = MineSensor(sensor, field, n)
-    start = np.column_stack([tracks_x, np.full(n, -r - 1.0)])
-    _drive(ms, start, np.tile([0.0, 0.9], (n, 1)), math.ceil((side + 2 * r + 2) / 0.9), rng)
+    found = _lawnmower_finds(sensor, spacing, m, seed=2)
     formula = detection_probability(model, sensor.width_m, spacing)
     expected = _truncated_sweep(sensor, spacing)
     # the cut at max_range_m costs the inverse cube a little, the cookie cutter nothing
     assert expected == pytest.approx(formula, abs=0.01 if model == "inverse_cube" else 1e-9)
     assert expected <= formula + 1e-9
-    found = int(field.detected.sum())
     assert _binomial_ok(found, m, expected), (found / m, expected, formula)
     assert abs(found / m - formula) <= 4.0 * math.sqrt(formula * (1 - formula) / m) + 0.01
 
@@ -183,15 +188,8 @@ def test_a_lawnmower_with_a_tabulated_curve_finds_the_planner_s_parallel_sweep(s
     and the planner's `parallel_sweep_detection` says so (the cookie cutter's min(1, W/S) at the
     curve's W would promise more wherever the tails overlap; at 8 m, beyond twice the reach, W/S)."""
     m = 4000
-    rng = np.random.default_rng(3)
-    side = 100.0
-    field = MineField(rng.uniform(0.0, side, size=(m, 2)))
+    found = _lawnmower_finds(TABLE, spacing, m, seed=3)
     r = max_range_m(TABLE)
-    tracks_x = np.arange(-r - spacing, side + r + spacing, spacing) + 0.123
-    n = len(tracks_x)
-    ms = MineSensor(TABLE, field, n)
-    start = np.column_stack([tracks_x, np.full(n, -r - 1.0)])
-    _drive(ms, start, np.tile([0.0, 0.9], (n, 1)), math.ceil((side + 2 * r + 2) / 0.9), rng)
     assert TABLE.lateral_range is not None
     planned = parallel_sweep_detection(TABLE.lateral_range, spacing)
     assert planned == pytest.approx(_truncated_sweep(TABLE, spacing), abs=1e-6)
@@ -199,7 +197,7 @@ def test_a_lawnmower_with_a_tabulated_curve_finds_the_planner_s_parallel_sweep(s
         assert planned == pytest.approx(TABLE.width_m / spacing, abs=1e-6)
     else:
         assert planned < min(1.0, TABLE.width_m / spacing) - 0.01
-    assert _binomial_ok(int(field.detected.sum()), m, planned), (field.detected.mean(), planned)
+    assert _binomial_ok(found, m, planned), (found / m, planned)
 
 
 # false alarms ------------------------------------------------------------------------------------
