@@ -179,8 +179,6 @@ def _fill(
     cap32 = np.float32(capacity)
     k2 = fx.shape[0]
     kn = tables.shape[2]
-    mid = k2 // 2 if k2 % 2 else -1
-    cells = np.empty(k2, np.intp)
     for o in range(rows.shape[0]):
         row = rows[o]
         b, i = row // n, row % n
@@ -195,18 +193,15 @@ def _fill(
         line[9] = submersion[b, i]
         line[10] = min(max(np.float32(slip[b, i]), np.float32(0.0)), np.float32(1.0))
         line[11 + phase[b, i]] = 1.0
-        # the terrain patch in the body frame, one cell per sample: the cell the physics reads there
+        # the terrain patch in the body frame, one cell per sample: the cell the physics reads
+        # there; elevation against the robot's own cell (the patch's centre when it has one)
+        here_elev = grid[cell_index(x, y, origin_x, origin_y, inv_cell, grid_rows, grid_cols), 1]
         for q in range(k2):
             px = x + c * fx[q] - s * fy[q]
             py = y + s * fx[q] + c * fy[q]
-            cells[q] = cell_index(px, py, origin_x, origin_y, inv_cell, grid_rows, grid_cols)
-            line[patch_at + q] = grid[cells[q], 0]
-        if mid >= 0:
-            here_elev = grid[cells[mid], 1]
-        else:
-            here_elev = grid[cell_index(x, y, origin_x, origin_y, inv_cell, grid_rows, grid_cols), 1]
-        for q in range(k2):
-            d = grid[cells[q], 1] - here_elev
+            cell = cell_index(px, py, origin_x, origin_y, inv_cell, grid_rows, grid_cols)
+            line[patch_at + q] = grid[cell, 0]
+            d = grid[cell, 1] - here_elev
             line[patch_at + k2 + q] = min(max(d, np.float32(-ELEVATION_CLIP_M)), np.float32(ELEVATION_CLIP_M))
         # table neighbours present now, body-frame offset, distance, link working
         if here[b, i]:

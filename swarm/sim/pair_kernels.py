@@ -23,6 +23,8 @@ _CELL_ROBOTS = 4.0
 _MAX_CELLS = 4096
 #: Most grid cells per robot (a swarm in a few tight clusters).
 _MAX_GRID = 16
+#: Up to this many robots in a run, its candidate pairs are read off a pair matrix (`_emit_pairs`).
+_DENSE_EMIT = 256
 
 
 @numba.njit(cache=True)
@@ -53,7 +55,8 @@ def table_candidates(
     total = 0
     for r in range(n_runs):
         total += np.count_nonzero(live[r])
-    keys = np.empty(total * (k + f) + n_runs * len(ff_keys), np.int64)  # k: a pair per table entry
+    # k: a pair per table entry; one spare place for `_emit_pairs`' branchless writes
+    keys = np.empty(total * (k + f) + n_runs * len(ff_keys) + 1, np.int64)
     tie = np.zeros(n_runs, np.bool_)
     m = 0
     for r in range(n_runs):
@@ -224,8 +227,25 @@ def _emit_pairs(
 ) -> int:
     """Write one run's robot keys from its neighbour lists `nbr` (points `idx` of the run) into
     `keys` from place m, in key order: for each robot, the robots after it that it lists or that
-    list it, then the fixed nodes in range. Returns the next free place."""
+    list it, then the fixed nodes in range. Returns the next free place. Up to `_DENSE_EMIT`
+    points, from a pair matrix read row by row (sorted as it is read, and written without a
+    branch: `keys` has a spare place at its end for that); beyond, row by row from the lists."""
     count, k = nbr.shape
+    if count <= _DENSE_EMIT:
+        pair = np.zeros((count, count), np.uint8)
+        for i in range(count):
+            for j in nbr[i]:
+                if j > i:
+                    pair[i, j] = 1
+                elif 0 <= j < i:
+                    pair[j, i] = 1
+        for a in range(count):
+            first = base + idx[a] * big_n
+            for b in range(a + 1, count):
+                keys[m] = first + idx[b]
+                m += pair[a, b]
+            m = _emit_fixed(a, idx, px, py, fixed, r_rf, n, big_n, base, keys, m)
+        return m
     # who lists each point that comes before it: the other half of its pairs
     back_start = np.zeros(count + 1, np.int64)
     for i in range(count):
@@ -260,13 +280,20 @@ def _emit_pairs(
         for s in range(size):
             keys[m] = base + idx[a] * big_n + idx[row[s]]
             m += 1
-        if r_rf > 0:
-            for c in range(len(fixed)):
-                dx = px[a] - fixed[c, 0]
-                dy = py[a] - fixed[c, 1]
-                if math.sqrt(dx * dx + dy * dy) <= r_rf:
-                    keys[m] = base + idx[a] * big_n + n + c
-                    m += 1
+        m = _emit_fixed(a, idx, px, py, fixed, r_rf, n, big_n, base, keys, m)
+    return m
+
+
+@numba.njit(cache=True)
+def _emit_fixed(a, idx, px, py, fixed, r_rf, n, big_n, base, keys, m):
+    """Point a's keys to the fixed nodes within `r_rf` (none if r_rf <= 0), from place m."""
+    if r_rf > 0:
+        for c in range(len(fixed)):
+            dx = px[a] - fixed[c, 0]
+            dy = py[a] - fixed[c, 1]
+            if math.sqrt(dx * dx + dy * dy) <= r_rf:
+                keys[m] = base + idx[a] * big_n + n + c
+                m += 1
     return m
 
 

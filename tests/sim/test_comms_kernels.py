@@ -31,10 +31,11 @@ def _kd_tree_keys(
     return np.sort(np.concatenate([keys, idx[row].astype(np.int64) * big_n + col + n]))
 
 
+@pytest.mark.parametrize("n", [120, 300])  # the pairs read off a pair matrix (up to 256), or row by row
 @pytest.mark.parametrize("layout", ["uniform", "clusters", "line"])
-def test_table_candidates_are_the_k_d_trees(layout: str) -> None:
+def test_table_candidates_are_the_k_d_trees(layout: str, n: int) -> None:
     rng = np.random.default_rng(5)
-    runs, n, k = 4, 300, 9
+    runs, k = 4, 9
     if layout == "uniform":
         xy = rng.uniform(0, 200, size=(runs, n, 2))
     elif layout == "clusters":  # a swarm just off its launch points, as in a benchmark
