@@ -589,23 +589,27 @@ def screen(
     n: int,
     size: float,
     keys: np.ndarray,
+    key_at: np.ndarray,
     bin_offset: int,
     run_stride: int,
     margin2: float,
 ) -> tuple[np.ndarray, np.ndarray]:
     """For the robots `who` (rows of `xy`, runs of n robots): is each in a screen bin, i.e. is
     ``run * run_stride + ((bx + bin_offset) << 22) + (by + bin_offset)``, with ``b = floor(xy /
-    size)``, among the sorted `keys`; and did it move further than ``sqrt(margin2)`` since
-    `last_xy` (never, from NaN)."""
+    size)``, among the sorted `keys` (run b's from ``key_at[b]`` to ``key_at[b + 1]``: the search
+    stays within them); and did it move further than ``sqrt(margin2)`` since `last_xy` (never,
+    from NaN)."""
     in_bins = np.zeros(len(who), np.bool_)
     jumped = np.zeros(len(who), np.bool_)
     for q in range(len(who)):
         g = who[q]
-        if len(keys):
+        b = g // n
+        lo, hi = key_at[b], key_at[b + 1]
+        if hi > lo:
             bx = np.int64(math.floor(xy[g, 0] / size)) + bin_offset
             by = np.int64(math.floor(xy[g, 1] / size)) + bin_offset
-            key = (g // n) * run_stride + (bx << 22) + by
-            at = min(np.searchsorted(keys, key), len(keys) - 1)
+            key = b * run_stride + (bx << 22) + by
+            at = min(lo + np.searchsorted(keys[lo:hi], key), hi - 1)
             in_bins[q] = keys[at] == key
         dx = xy[g, 0] - last_xy[g, 0]
         dy = xy[g, 1] - last_xy[g, 1]

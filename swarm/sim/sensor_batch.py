@@ -41,6 +41,7 @@ class SensorBatch:
         self.false_alarms = bool(live) and live[0].false_alarms_per_m > 0
         self._dirty = np.ones(self.runs, bool)
         self._keys = np.empty(0, np.int64)
+        self._key_at = np.zeros(self.runs + 1, np.int64)  # where each run's keys start
         self._per_run: list[np.ndarray] = [np.empty(0, np.int64)] * self.runs
         # each run's mines and which are targets, padded to the largest field (NaN, False), and
         # its mine count and sensor range: kept by `_refresh`, as the screen keys are
@@ -91,6 +92,7 @@ class SensorBatch:
         self._dirty[:] = False
         # the run is the keys' leading part (`_RUN_STRIDE`), so runs in order are sorted keys
         self._keys = np.concatenate(self._per_run)
+        self._key_at = np.concatenate(([0], np.cumsum([len(k) for k in self._per_run]))).astype(np.int64)
 
     def step(
         self,
@@ -122,8 +124,8 @@ class SensorBatch:
         # robots in a bin next to a target of their run (`_maybe_near`'s screen; exact for any
         # point within 2^21 bins, 10,000 km, of the origin, as every robot on a map is), and robots
         # that jumped further than the screen's margin: those are looked at by their run's update
-        in_bins, jumped = pair_kernels.screen(xy, last_xy, who, n, self.size, self._keys, _BIN_OFFSET,
-                                              _RUN_STRIDE, SCREEN_MARGIN_M**2)  # fmt: skip
+        in_bins, jumped = pair_kernels.screen(xy, last_xy, who, n, self.size, self._keys, self._key_at,
+                                              _BIN_OFFSET, _RUN_STRIDE, SCREEN_MARGIN_M**2)  # fmt: skip
         busy = self._discrete.copy()  # a sensor that draws once per pass: its own update
         busy[run[in_bins]] = True
         busy[run[jumped]] = True

@@ -537,10 +537,13 @@ def test_screen_is_the_bin_lookup_and_jump_check() -> None:
         return run.astype(np.int64) * stride + (bins[:, 0] << 22) + bins[:, 1]
 
     keys = np.unique(keys_of(xy[who[::3]], who[::3] // n))
-    in_bins, jumped = pair_kernels.screen(xy, last, who, n, size, keys, offset, stride, 25.0)
+    key_at = np.searchsorted(keys, np.arange(len(xy) // n + 1) * stride)  # each run's keys start
+    in_bins, jumped = pair_kernels.screen(xy, last, who, n, size, keys, key_at, offset, stride, 25.0)
     np.testing.assert_array_equal(in_bins, np.isin(keys_of(xy[who], who // n), keys))
+    assert in_bins.any() and not in_bins.all()
     seg = xy[who] - last[who]
     with np.errstate(invalid="ignore"):
         np.testing.assert_array_equal(jumped, seg[:, 0] * seg[:, 0] + seg[:, 1] * seg[:, 1] > 25.0)
-    none, _ = pair_kernels.screen(xy, last, who, n, size, keys[:0], offset, stride, 25.0)
+    no_keys = np.zeros_like(key_at)
+    none, _ = pair_kernels.screen(xy, last, who, n, size, keys[:0], no_keys, offset, stride, 25.0)
     assert not none.any()
