@@ -8,15 +8,27 @@ import json
 import sys
 from collections.abc import Sequence
 from pathlib import Path
+from typing import NoReturn
 
 from swarm import __version__
 from swarm.errors import InputError, SwarmError
 
 EXIT_BAD_INPUT = 2
+#: The finest `model validate --fixed-step` (s): a twentieth of calibration's 5 ms, and ten million
+#: steps for a quarter-hour run (a finer step only costs memory and time: 1e-12 s asked for 189 TiB).
+MIN_FIXED_STEP_S = 1e-4
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse with its errors as the rest of the command's: one line, exit 2 (argparse prints
+    its usage block first; `swarm CMD --help` still shows it). Subcommands inherit the class."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(EXIT_BAD_INPUT, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
 
 
 def _parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="swarm",
         description="Plan and simulate swarms of small skid-steered robots in the surf zone.",
     )
@@ -28,17 +40,19 @@ def _parser() -> argparse.ArgumentParser:
 
     def run_inputs(p: argparse.ArgumentParser, many: bool) -> None:
         action = "append" if many else "store"
-        p.add_argument("--robot", required=True, type=Path, help="robot YAML (mass, geometry, encoder ticks)")
         p.add_argument(
-            "--encoders", action=action, type=Path, help="encoder log: time_ms left_ticks right_ticks"
+            "--robot", required=True, type=_path, help="robot YAML (mass, geometry, encoder ticks)"
         )
-        p.add_argument("--truth", action=action, type=Path, help="pose reference: t X Y heading")
         p.add_argument(
-            "--ssv", action=action, type=Path, help="simulation export (.ssv) instead of encoders+truth"
+            "--encoders", action=action, type=_path, help="encoder log: time_ms left_ticks right_ticks"
+        )
+        p.add_argument("--truth", action=action, type=_path, help="pose reference: t X Y heading")
+        p.add_argument(
+            "--ssv", action=action, type=_path, help="simulation export (.ssv) instead of encoders+truth"
         )
         p.add_argument("--counter-bits", type=int, help="encoder counter width, to unwrap counter overflow")
         p.add_argument("--model", choices=("skid", "kinematic", "lagrangian"), default="skid")
-        p.add_argument("--terrain", type=Path, help="terrain-mode YAML overriding or adding to the defaults")
+        p.add_argument("--terrain", type=_path, help="terrain-mode YAML overriding or adding to the defaults")
         p.add_argument(
             "--mode",
             help="terrain mode the runs were on (default: the only mode in --terrain, else concrete)",
@@ -62,11 +76,11 @@ def _parser() -> argparse.ArgumentParser:
     )
     validate.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
     validate.add_argument(
-        "--plot", type=Path, metavar="FIG.png", help="write the thesis-style overlay figure"
+        "--plot", type=_path, metavar="FIG.png", help="write the thesis-style overlay figure"
     )
     validate.add_argument(
         "--out",
-        type=Path,
+        type=_path,
         metavar="DIR",
         help="write validation.json, validation.npz and the report (report.html, .md, .json) here",
     )
@@ -82,7 +96,7 @@ def _parser() -> argparse.ArgumentParser:
         "--max-evaluations", type=int, default=60, help="least-squares budget (default 60)"
     )
     calibrate.add_argument("--json", action="store_true", help="print the result as JSON")
-    calibrate.add_argument("--out", required=True, type=Path, help="terrain-mode YAML to write")
+    calibrate.add_argument("--out", required=True, type=_path, help="terrain-mode YAML to write")
     calibrate.set_defaults(handler=_cmd_calibrate)
     _add_map_commands(commands)
     _add_path_command(commands)
@@ -102,15 +116,15 @@ def _add_map_commands(commands) -> None:
     terrain_help = "terrain-mode YAML adding modes the map's classes name (default: the bundled modes)"
 
     info = map_cmds.add_parser("info", help="size, cell, terrain fractions, elevation, slope, regions")
-    info.add_argument("map", type=Path, metavar="MAP.yaml")
-    info.add_argument("--terrain", type=Path, help=terrain_help)
+    info.add_argument("map", type=_path, metavar="MAP.yaml")
+    info.add_argument("--terrain", type=_path, help=terrain_help)
     info.add_argument("--json", action="store_true", help="print one JSON object instead of tables")
     info.set_defaults(handler=_cmd_map_info)
 
     show = map_cmds.add_parser("show", help="draw the map: terrain, elevation contours, regions")
-    show.add_argument("map", type=Path, metavar="MAP.yaml")
-    show.add_argument("--terrain", type=Path, help=terrain_help)
-    show.add_argument("-o", "--out", required=True, type=Path, metavar="FIG.png", help="figure to write")
+    show.add_argument("map", type=_path, metavar="MAP.yaml")
+    show.add_argument("--terrain", type=_path, help=terrain_help)
+    show.add_argument("-o", "--out", required=True, type=_path, metavar="FIG.png", help="figure to write")
     show.set_defaults(handler=_cmd_map_show)
 
     generate = map_cmds.add_parser("generate", help="a procedural beach (swarm.world.generate)")
@@ -125,12 +139,14 @@ def _add_map_commands(commands) -> None:
         "--tide-range-m", type=float, help="tidal range (m) widening the wet band (default 1)"
     )
     generate.add_argument(
-        "--rock-outcrops", type=float, help="rock outcrops ringed by boulders, 0..1 (default 0)"
+        "--rock-outcrops",
+        type=float,
+        help="rock outcrops ringed by boulders: about 1 for a rock platform every 300 m, 0..5 (default 0)",
     )
     generate.add_argument("--river-mouth", action="store_true", help="a river through the dunes into the sea")
     generate.add_argument("--name", help="map name (default: the output file's stem)")
     generate.add_argument(
-        "-o", "--out", required=True, type=Path, metavar="maps/NAME.yaml", help="map YAML to write (+ .npz)"
+        "-o", "--out", required=True, type=_path, metavar="maps/NAME.yaml", help="map YAML to write (+ .npz)"
     )
     generate.set_defaults(handler=_cmd_map_generate)
 
@@ -138,12 +154,12 @@ def _add_map_commands(commands) -> None:
         "import-dem", help="a map from an ESRI ASCII DEM (.asc), terrain classified by elevation"
     )
     dem.add_argument(
-        "dem", type=Path, metavar="DEM.asc", help="elevation grid, metres, projected x east y north"
+        "dem", type=_path, metavar="DEM.asc", help="elevation grid, metres, projected x east y north"
     )
     dem.add_argument("--name", help="map name (default: the output file's stem)")
     dem.add_argument("--fill", type=float, metavar="M", help="elevation (m) for NODATA cells")
     dem.add_argument(
-        "-o", "--out", required=True, type=Path, metavar="maps/NAME.yaml", help="map YAML to write (+ .npz)"
+        "-o", "--out", required=True, type=_path, metavar="maps/NAME.yaml", help="map YAML to write (+ .npz)"
     )
     dem.set_defaults(handler=_cmd_map_import_dem)
 
@@ -177,11 +193,43 @@ def _check_folder(path: Path | None, option: str) -> None:
         )
 
 
-def _output_folder(folder: Path, args: argparse.Namespace):
+def _path(text: str) -> Path:
+    """A path argument; an empty one is refused (Path("") is the current folder)."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError("found an empty path, expected a file or folder name")
+    return Path(text)
+
+
+#: The files that mark each command's output folder (`swarm.report.load`'s kinds); a simulation's
+#: folder holds a plan.json too, so its own files are looked for first.
+OUTPUT_MARKS = {
+    "simulation": ("outcome.json", "events.jsonl", "trajectories.npz"),
+    "study": ("study.json", "summary.json", "results.parquet"),
+    "plan": ("plan.json",),
+    "validation": ("validation.json",),
+}
+
+
+def _output_kind(folder: Path) -> str | None:
+    """Which command's output `folder` holds, None for none (or no folder)."""
+    if folder.is_dir():
+        for kind, marks in OUTPUT_MARKS.items():
+            if any((folder / name).is_file() for name in marks):
+                return kind
+    return None
+
+
+def _output_folder(folder: Path, args: argparse.Namespace, kind: str | None = None):
     """The lock on an output folder while this command writes it (`swarm.files.folder_lock`): a
-    second swarm process writing the same folder stops with one line naming the holder."""
+    second swarm process writing the same folder stops with one line naming the holder. With
+    `kind` (the command's own), a folder holding another command's output is refused: a study
+    written into a plan's folder would overwrite its report and leave neither readable."""
     from swarm.files import folder_lock
 
+    held = _output_kind(folder) if kind is not None else None
+    if held not in (None, kind):
+        expected = f"a new folder or a {kind} folder (this one holds a {held}'s output)"
+        raise InputError("command line", "--out", str(folder), expected)
     return folder_lock(folder, getattr(args, "command_line", None))
 
 
@@ -200,7 +248,7 @@ def _choose_mode(args: argparse.Namespace):
             name = next(iter(own))
     name = name or "concrete"
     if name not in library:
-        raise InputError(args.terrain or "--mode", "--mode", name, f"one of {sorted(library)}")
+        raise InputError(args.terrain or "command line", "--mode", name, f"one of {sorted(library)}")
     return library[name]
 
 
@@ -267,8 +315,10 @@ def _cmd_validate(args: argparse.Namespace) -> int:
     models = [args.model] + (
         [m for m in ("skid", "kinematic", "lagrangian") if m != args.model] if args.compare else []
     )
-    if args.fixed_step is not None and not 0 < args.fixed_step <= 0.1:
-        raise InputError("command line", "--fixed-step", args.fixed_step, "a step in (0, 0.1] seconds")
+    if args.fixed_step is not None and not MIN_FIXED_STEP_S <= args.fixed_step <= 0.1:
+        raise InputError(
+            "command line", "--fixed-step", args.fixed_step, f"a step in [{MIN_FIXED_STEP_S:g}, 0.1] seconds"
+        )
     opts = {"adaptive": args.adaptive, **({} if args.fixed_step is None else {"dt_s": args.fixed_step})}
     results = {m: validate(run, robot, mode, m, **(opts if m == "skid" else {})) for m in models}
     scores = {m: r[0] for m, r in results.items()}
@@ -291,7 +341,7 @@ def _cmd_validate(args: argparse.Namespace) -> int:
             terrain=mode.name,
             robot=str(args.robot),
         )
-        with _output_folder(args.out, args):
+        with _output_folder(args.out, args, "validation"):
             written = {
                 **write_validation(args.out, v),
                 **validation_report(v, date=today()).write_all(args.out),
@@ -332,8 +382,10 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
         chosen = f"mode '{base.name}' (the default: no --mode given; say --mode soft_sand for a sand run)"
     runs = _runs(args, robot)
     free = None
-    if args.free:
+    if args.free is not None:
         free = [f.strip() for f in args.free.split(",") if f.strip()]
+        if not free:
+            raise InputError("command line", "--free", args.free, "a comma-separated list of parameters")
         allowed = [*MODEL_BOUNDS[args.model], *(COM_PARAMS if args.model == "skid" else ())]
         for f in free:
             if f not in allowed:
@@ -537,16 +589,16 @@ def _add_path_command(commands) -> None:
         "path",
         help="plan a path on a map with OMPL, or export OMPL's benchmark log for planner profiles",
     )
-    path.add_argument("map", type=Path, metavar="MAP.yaml")
+    path.add_argument("map", type=_path, metavar="MAP.yaml")
     path.add_argument("--from", dest="start", metavar="X,Y", help="start, world metres")
     path.add_argument("--to", dest="goal", metavar="X,Y", help="goal, world metres")
     path.add_argument(
-        "--profile", type=Path, metavar="P.yaml", help="planner profile (default: the built-in 'fast')"
+        "--profile", type=_path, metavar="P.yaml", help="planner profile (default: the built-in 'fast')"
     )
     path.add_argument("--seed", type=int, default=0, help="random seed: same seed and profile, same path")
-    path.add_argument("--robot", type=Path, help="robot YAML (default: the bundled skid4)")
+    path.add_argument("--robot", type=_path, help="robot YAML (default: the bundled skid4)")
     path.add_argument(
-        "--terrain", type=Path, help="terrain-mode YAML overriding or adding to the bundled modes"
+        "--terrain", type=_path, help="terrain-mode YAML overriding or adding to the bundled modes"
     )
     path.add_argument("--json", action="store_true", help="print one JSON object")
     bench = path.add_argument_group("benchmark export (OMPL's Benchmark tool)")
@@ -560,7 +612,7 @@ def _add_path_command(commands) -> None:
     bench.add_argument(
         "--objective", choices=("length", "terrain_cost"), help="the experiment's one objective"
     )
-    bench.add_argument("-o", "--out", type=Path, metavar="bench.log", help="benchmark log to write")
+    bench.add_argument("-o", "--out", type=_path, metavar="bench.log", help="benchmark log to write")
     path.set_defaults(handler=_cmd_path)
 
 
@@ -570,7 +622,7 @@ def _add_plan_command(commands) -> None:
     plan = commands.add_parser(
         "plan", help="allocate a mission's tasks, plan every robot's route, write plan and report"
     )
-    plan.add_argument("mission", type=Path, metavar="MISSION.yaml")
+    plan.add_argument("mission", type=_path, metavar="MISSION.yaml")
     plan.add_argument(
         "--seed",
         type=int,
@@ -578,7 +630,7 @@ def _add_plan_command(commands) -> None:
     )
     plan.add_argument(
         "--out",
-        type=Path,
+        type=_path,
         metavar="DIR",
         help="output folder (default: reports/<mission>-<YYYYmmdd-HHMMSS>/)",
     )
@@ -625,7 +677,7 @@ def _cmd_plan(args: argparse.Namespace) -> int:
     out = args.out or Path("reports") / f"{mission.name}-{time.strftime('%Y%m%d-%H%M%S')}"
     if out.exists() and not out.is_dir():
         raise InputError("command line", "--out", str(out), "a folder (this is a file)")
-    with _output_folder(out, args):
+    with _output_folder(out, args, "plan"):
         with tqdm(desc="planning routes", unit="route", file=sys.stderr, leave=False) as bar:
 
             def progress(done: int, total: int) -> None:
@@ -690,7 +742,7 @@ def _add_simulate_command(commands) -> None:
     sim = commands.add_parser(
         "simulate", help="plan a mission and run it once in the simulator; write the log and a report"
     )
-    sim.add_argument("mission", type=Path, metavar="MISSION.yaml")
+    sim.add_argument("mission", type=_path, metavar="MISSION.yaml")
     sim.add_argument(
         "--seed",
         type=int,
@@ -704,13 +756,13 @@ def _add_simulate_command(commands) -> None:
     )
     sim.add_argument(
         "--out",
-        type=Path,
+        type=_path,
         metavar="DIR",
         help="output folder (default: reports/<mission>-sim-<YYYYmmdd-HHMMSS>/)",
     )
     sim.add_argument(
         "--animate",
-        type=Path,
+        type=_path,
         metavar="FILE.gif|FILE.mp4",
         help="also write an animation (.mp4 needs ffmpeg)",
     )
@@ -777,7 +829,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     out = args.out or Path("reports") / f"{mission.name}-sim-{time.strftime('%Y%m%d-%H%M%S')}"
     if out.exists() and not out.is_dir():
         raise InputError("command line", "--out", str(out), "a folder (this is a file)")
-    with _output_folder(out, args):
+    with _output_folder(out, args, "simulation"):
         seed = mission.seed if args.seed is None else args.seed
 
         with tqdm(desc="planning routes", unit="route", file=sys.stderr, leave=False) as bar:
@@ -966,7 +1018,7 @@ def _add_study_command(commands) -> None:
     st = commands.add_parser(
         "study", help="run a mission many times over seeds and a parameter grid; success with intervals"
     )
-    st.add_argument("mission", type=Path, metavar="MISSION.yaml")
+    st.add_argument("mission", type=_path, metavar="MISSION.yaml")
     st.add_argument("--runs", type=int, required=True, help="runs per parameter point")
     st.add_argument(
         "--sweep",
@@ -996,7 +1048,7 @@ def _add_study_command(commands) -> None:
     )
     st.add_argument(
         "--out",
-        type=Path,
+        type=_path,
         metavar="DIR",
         help="study folder (default: reports/<mission>-study/); run again with the same arguments to resume",
     )
@@ -1040,7 +1092,7 @@ def _cmd_study(args: argparse.Namespace) -> int:
     out = args.out or Path("reports") / f"{args.mission.stem}-study"
     if out.exists() and not out.is_dir():
         raise InputError("command line", "--out", str(out), "a folder (this is a file)")
-    with _output_folder(out, args):
+    with _output_folder(out, args, "study"):
         spec = StudySpec(str(args.mission), args.runs, sweeps, args.seed, args.target, args.confidence)
         # every point valid, and fitting in memory, before anything starts
         local = args.backend == "local"  # Ray's workers have their own machines' memory
@@ -1089,7 +1141,7 @@ def _add_report_command(commands) -> None:
     )
     rep.add_argument(
         "path",
-        type=Path,
+        type=_path,
         metavar="PATH",
         help="a folder written by swarm plan, simulate, study or model validate --out (or a file in it)",
     )

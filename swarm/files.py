@@ -193,8 +193,9 @@ class _DuplicateKey(Exception):
 
 
 class StrictLoader(yaml.SafeLoader):
-    """Safe YAML with duplicate keys refused and YAML 1.2 exponent floats (`2.4e9`, `1e5`, `2e4`;
-    YAML 1.1, PyYAML's default, reads those as strings)."""
+    """Safe YAML with duplicate keys refused and YAML 1.2's core schema for plain scalars
+    (`_CORE_SCHEMA`): `2.4e9` is a number (YAML 1.1, PyYAML's default, reads it as a string),
+    `yes`, `no`, `on`, `off`, `1_000` and `12:30` are text, not true, false, 1000 and 750."""
 
     def construct_mapping(self, node, deep=False):  # type: ignore[override]
         self.flatten_mapping(node)
@@ -211,11 +212,35 @@ class StrictLoader(yaml.SafeLoader):
         return super().construct_mapping(node, deep=deep)
 
 
-StrictLoader.add_implicit_resolver(
-    "tag:yaml.org,2002:float",
-    re.compile(r"^[-+]?[0-9][0-9_]*(?:\.[0-9_]*)?[eE][-+]?[0-9]+$"),
-    list("-+0123456789"),
+#: YAML 1.2's core schema (spec 1.2.2, sec. 10.3.2): the plain scalars that are not strings.
+_CORE_SCHEMA = (
+    ("tag:yaml.org,2002:bool", r"^(?:true|True|TRUE|false|False|FALSE)$", "tTfF"),
+    ("tag:yaml.org,2002:int", r"^(?:[-+]?[0-9]+|0o[0-7]+|0x[0-9a-fA-F]+)$", "-+0123456789"),
+    (
+        "tag:yaml.org,2002:float",
+        r"^(?:[-+]?(?:\.[0-9]+|[0-9]+(?:\.[0-9]*)?)(?:[eE][-+]?[0-9]+)?"
+        r"|[-+]?\.(?:inf|Inf|INF)|\.(?:nan|NaN|NAN))$",
+        "-+0123456789.",
+    ),
+    ("tag:yaml.org,2002:null", r"^(?:~|null|Null|NULL|)$", ["~", "n", "N", ""]),
 )
+#: YAML 1.1 resolvers dropped: its timestamps (`2026-11-26` is text in 1.2) and `=`.
+_NOT_CORE = {t for t, _, _ in _CORE_SCHEMA} | {"tag:yaml.org,2002:timestamp", "tag:yaml.org,2002:value"}
+StrictLoader.yaml_implicit_resolvers = {
+    first: [(tag, regexp) for tag, regexp in resolvers if tag not in _NOT_CORE]
+    for first, resolvers in yaml.SafeLoader.yaml_implicit_resolvers.items()
+}
+for _tag, _pattern, _first in _CORE_SCHEMA:
+    StrictLoader.add_implicit_resolver(_tag, re.compile(_pattern), list(_first))
+
+
+def _core_int(loader: yaml.SafeLoader, node: yaml.ScalarNode) -> int:
+    """A YAML 1.2 integer: decimal (`017` is 17, where YAML 1.1 reads octal 15), 0o octal, 0x hex."""
+    text = str(loader.construct_scalar(node))
+    return int(text, 0) if text[:2] in ("0o", "0x") else int(text)
+
+
+StrictLoader.add_constructor("tag:yaml.org,2002:int", _core_int)
 
 
 def parse_yaml(text: str, source: str | os.PathLike[str], loader: type = StrictLoader) -> object:

@@ -40,3 +40,52 @@ def test_a_truncated_grid_is_one_line_and_exit_2(truncated_map, tmp_path, comman
         "zip archive', expected an .npz grid (numpy.savez) holding arrays 'terrain' and 'elevation_m'\n"
     )
     assert not out.exists()
+
+
+#: What each command's output folder holds (one file is enough to mark it).
+HOLDS = {"plan": "plan.json", "simulation": "outcome.json", "study": "study.json"}
+
+
+@pytest.mark.parametrize(
+    ("command", "held"),
+    [
+        ("study", "plan"),
+        ("plan", "study"),
+        ("plan", "simulation"),
+        ("simulate", "plan"),
+        ("simulate", "study"),
+    ],
+)
+def test_an_output_folder_of_another_command_is_refused_untouched(tmp_path, command, held, capsys) -> None:
+    """A study written into a plan's folder once overwrote its report, and the folder then read as
+    neither: now it is one line, before any work, and the folder is left as it was."""
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / HOLDS[held]).write_text("{}")
+    (out / "report.html").write_text("the old report")
+    argv = [command, str(REPO / "missions" / "landing.yaml"), "--out", str(out)]
+    assert main([*argv, *(["--runs", "2"] if command == "study" else [])]) == 2
+    kind = {"simulate": "simulation"}.get(command, command)
+    assert capsys.readouterr().err == (
+        f"swarm: error: command line: --out: found '{out}', "
+        f"expected a new folder or a {kind} folder (this one holds a {held}'s output)\n"
+    )
+    assert sorted(p.name for p in out.iterdir()) == sorted([HOLDS[held], "report.html"])
+    assert (out / "report.html").read_text() == "the old report"
+
+
+def test_an_empty_path_and_a_bad_number_are_one_line(capsys) -> None:
+    """argparse's own errors, without its usage block: `--out ''` once wrote into the current folder."""
+    landing = str(REPO / "missions" / "landing.yaml")
+    for argv, says in (
+        (
+            ["plan", landing, "--out", ""],
+            "argument --out: found an empty path, expected a file or folder name",
+        ),
+        (["simulate", landing, "--seed", "abc"], "argument --seed: invalid int value: 'abc'"),
+    ):
+        with pytest.raises(SystemExit) as exit_:
+            main(argv)
+        assert exit_.value.code == 2
+        err = capsys.readouterr().err
+        assert err == f"swarm {argv[0]}: error: {says} (see swarm {argv[0]} --help)\n"

@@ -168,6 +168,15 @@ def _negative_mass(tmp_path: Path) -> tuple[list[object], list[str]]:
     return args, [str(robot), "mass_kg"]
 
 
+def _track_wider_than_a_vehicle(tmp_path: Path) -> tuple[list[object], list[str]]:
+    """1e30 m once reached the planner, whose footprint in cells overflowed a C long."""
+    data = yaml.safe_load(ROBOT.read_text()) | {"track_width_m": 1e30}
+    robot = tmp_path / "robot.yaml"
+    robot.write_text(yaml.safe_dump(data))
+    runs = ["--encoders", encoders("concrete_straight"), "--truth", truth("concrete_straight")]
+    return ["--robot", robot, *runs], [str(robot), "track_width_m", "<= 20"]
+
+
 def _centre_of_mass_off_the_wheels(tmp_path: Path) -> tuple[list[object], list[str]]:
     data = yaml.safe_load(ROBOT.read_text()) | {"com_x_m": -0.2}
     robot = tmp_path / "robot.yaml"
@@ -184,7 +193,12 @@ def _centre_of_mass_off_the_wheels(tmp_path: Path) -> tuple[list[object], list[s
 
 
 def _zero_fixed_step(tmp_path: Path) -> tuple[list[object], list[str]]:
-    return [*run_args("concrete_straight"), "--fixed-step", "0"], ["--fixed-step", "(0, 0.1]"]
+    return [*run_args("concrete_straight"), "--fixed-step", "0"], ["--fixed-step", "[0.0001, 0.1]"]
+
+
+def _tiny_fixed_step(tmp_path: Path) -> tuple[list[object], list[str]]:
+    """A step so fine its arrays would not fit in memory (1e-12 s asked numpy for 189 TiB)."""
+    return [*run_args("concrete_straight"), "--fixed-step", "1e-12"], ["--fixed-step", "[0.0001, 0.1]"]
 
 
 def _encoders_without_truth(tmp_path: Path) -> tuple[list[object], list[str]]:
@@ -223,8 +237,10 @@ def _mismatched_runs(tmp_path: Path) -> tuple[list[object], list[str]]:
         _missing_encoders,
         _malformed_encoder_line,
         _negative_mass,
+        _track_wider_than_a_vehicle,
         _centre_of_mass_off_the_wheels,
         _zero_fixed_step,
+        _tiny_fixed_step,
         _encoders_without_truth,
         _unknown_mode,
         _bad_terrain_value,

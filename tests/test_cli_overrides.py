@@ -30,6 +30,11 @@ def test_plan_takes_set_and_plans_that_many_robots(tmp_path, capsys) -> None:
         ("swarm.cont=60", "--set: swarm.cont: found 'cont', expected a key of swarm (known keys: count)"),
         ("swarm.count=abc", "swarm.count: found 'abc', expected a whole number"),
         ("swarm.count", "--set: found 'swarm.count', expected KEY=VALUE"),
+        # the file's own key is what breaks, but the --set is why: the line says both
+        (
+            "swarm.count=3",
+            "landing.yaml (with --set swarm.count=3): tasks[0].robots_per_zone: found 4, expected at most 1",
+        ),
     ],
 )
 def test_a_bad_set_is_the_same_one_line_in_every_command(tmp_path, capsys, pair, says) -> None:

@@ -9,6 +9,7 @@ from pathlib import Path
 import pytest
 
 from swarm.errors import InputError
+from swarm.files import parse_yaml
 from swarm.mission import read_mission_yaml
 from swarm.planning.profiles import load_profile
 from swarm.robot.params import load_robot
@@ -47,6 +48,32 @@ def test_a_key_given_twice_is_an_error_naming_it_and_its_line(kind, tmp_path) ->
     key = first.split(":")[0]
     expected = "expected each key once in a mapping"
     assert str(err.value) == f"{path}: line {len(lines) + 1}: found {key!r}, {expected}"
+
+
+@pytest.mark.parametrize(
+    ("text", "value"),
+    [
+        # YAML 1.2's core schema (spec 1.2.2, sec. 10.3.2); PyYAML's 1.1 reads the first six
+        # as 1000, True, False, 15 (octal), 750 (base 60) and a date
+        ("1_000", "1_000"),
+        ("yes", "yes"),
+        ("off", "off"),
+        ("017", 17),
+        ("12:30", "12:30"),
+        ("2026-11-26", "2026-11-26"),
+        ("0o17", 15),
+        ("0x1F", 31),
+        ("-3", -3),
+        ("2.4e9", 2.4e9),
+        ("1.", 1.0),
+        ("-.inf", float("-inf")),
+        ("True", True),
+        ("~", None),
+    ],
+)
+def test_plain_scalars_follow_the_yaml_1_2_core_schema(text, value) -> None:
+    got = parse_yaml(f"key: {text}\n", "t.yaml")["key"]
+    assert got == value and type(got) is type(value)
 
 
 def test_yaml_1_2_numbers_and_integer_valued_floats_for_counts(tmp_path) -> None:

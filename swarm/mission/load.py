@@ -140,13 +140,21 @@ class _Report:
 
     def __init__(self, source: str, overrides: Mapping[str, object], overrides_source: str) -> None:
         self.source = source
+        self.overrides = dict(overrides)
         self.override_paths = [_split(k) for k in overrides]
         self.overrides_source = overrides_source
 
     def error(self, parts: Sequence[str | int], found: object, expected: str) -> InputError:
+        """An error in an overridden key blames the override; one elsewhere still names the
+        overrides, which may be what made the file's own value wrong (a smaller swarm.count)."""
         text = [str(p) for p in parts]
         overridden = any(text[: len(o)] == o for o in self.override_paths)
-        source = f"{self.overrides_source} (over {self.source})" if overridden else self.source
+        source = self.source
+        if overridden:
+            source = f"{self.overrides_source} (over {self.source})"
+        elif self.overrides:
+            given = ", ".join(f"{k}={v}" for k, v in self.overrides.items())
+            source = f"{self.source} (with {self.overrides_source} {given})"
         return InputError(source, key_path(parts), found, expected)
 
 
@@ -358,6 +366,20 @@ class _References:
                         task.hold_s,
                         f"at most phases.beach_operations.time_limit_s ({beach_limit:g} s)",
                     )
+
+        # every station at once: each task fits alone (above), and together they must too
+        held = {
+            t: (len(task.zones) * task.robots_per_zone if task.type == "landing" else
+                len(task.points) * task.robots_per_point)
+            for t, task in enumerate(m.tasks) if task.type in ("landing", "surveillance", "beacon")
+        }  # fmt: skip
+        if sum(held.values()) > count:
+            each = ", ".join(f"tasks[{t}] {n}" for t, n in held.items())
+            raise err(
+                ["swarm", "count"],
+                count,
+                f"at least {sum(held.values())}, the robots the stations hold together ({each})",
+            )
 
         # hazards
         hz = m.hazards

@@ -166,6 +166,9 @@ def check_planner_params(planner: str, params: dict, source: str) -> None:
             isinstance(value, float) and not math.isfinite(value)
         ):
             raise InputError(source, f"params.{key}", value, "a number or true/false")
+        if key == "range" and value < 0:  # OMPL takes any number, and reads every one <= 0 as 0
+            expected = "metres >= 0 (0: OMPL's default from the map's size)"
+            raise InputError(source, "params.range", value, expected)
         try:
             setter(value)
         except (TypeError, ValueError, RuntimeError):  # RuntimeError: OMPL's own range checks

@@ -69,6 +69,8 @@ TRUTH_COLUMNS = ("t_s", "X_m", "Y_m", "heading_rad")
 SSV_COLUMNS = ("t_s", "left_wheel_rad_per_s", "right_wheel_rad_per_s", "heading_rad", "X_m", "Y_m")
 
 MAX_TICKS_PER_SAMPLE = 2048
+#: The largest tick count a log may hold: 2**53, past which a float64 skips whole numbers.
+MAX_TICK_COUNT = 2**53
 """Largest believable change of one wheel's tick count between consecutive encoder samples.
 
 Why this number: at the thesis's 98 x 20 = 1960 ticks per wheel revolution and ~26 ms per
@@ -368,14 +370,15 @@ def read_encoders(path: PathIn, *, counter_bits: int | None = None) -> EncoderLo
     table = _read_table(path, ENCODER_COLUMNS, "encoder log (time_ms left_ticks right_ticks)", "ms")
     values = table.values
     for col in (1, 2):
-        fractional = np.flatnonzero(values[:, col] != np.round(values[:, col]))
-        if fractional.size:
-            i = int(fractional[0])
+        # past 2**53 a float holds no whole number exactly, and an int64 cast wraps
+        bad = (values[:, col] != np.round(values[:, col])) | (np.abs(values[:, col]) > MAX_TICK_COUNT)
+        if bad.any():
+            i = int(np.argmax(bad))
             raise InputError(
                 table.source,
                 _where(int(table.lines[i]), col, ENCODER_COLUMNS),
                 float(values[i, col]),
-                "a whole number of encoder ticks",
+                f"a whole number of encoder ticks, at most {MAX_TICK_COUNT:.0e} either way",
             )
     if counter_bits is None:
         bits = None

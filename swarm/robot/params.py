@@ -19,6 +19,11 @@ from swarm.files import read_yaml
 from swarm.inputs import InputModel, expected, validate
 
 GRAVITY_MPS2 = 9.80665
+#: What a robot file may describe: a ground vehicle (a main battle tank is 60 t and 10 m long, its
+#: road wheels 0.4 m in radius). Past these a footprint in map cells no longer fits an integer.
+MAX_MASS_KG = 100_000.0
+MAX_SIZE_M = 20.0
+MAX_WHEEL_RADIUS_M = 2.0
 
 
 @dataclass(frozen=True)
@@ -178,19 +183,21 @@ class RobotFile(InputModel):
     """A robot YAML file as written (swarm/data/robots/skid4.yaml); `RobotParams` is what it means."""
 
     name: str | None = Field(None, min_length=1, description="Default: the file's stem.")
-    mass_kg: float = Field(gt=0, description="The whole robot, wheels included.")
+    mass_kg: float = Field(gt=0, le=MAX_MASS_KG, description="The whole robot, wheels included.")
     wheel_mass_kg: float = Field(gt=0, description="One wheel.")
-    wheel_radius_m: float = Field(gt=0)
-    track_width_m: float = Field(gt=0, description="Left-right wheel-centre distance (the thesis's d).")
-    wheelbase_m: float = Field(gt=0, description="Front-rear axle distance.")
-    length_m: float = Field(gt=0, description="Body box length a (eq. 2.13).")
-    width_m: float = Field(gt=0, description="Body box width b (eq. 2.13).")
-    height_m: float = Field(gt=0, description="Body box height c (eq. 2.13).")
-    encoder_ticks_per_wheel_rev: int = Field(1960, gt=0)
+    wheel_radius_m: float = Field(gt=0, le=MAX_WHEEL_RADIUS_M)
+    track_width_m: float = Field(
+        gt=0, le=MAX_SIZE_M, description="Left-right wheel-centre distance (the thesis's d)."
+    )
+    wheelbase_m: float = Field(gt=0, le=MAX_SIZE_M, description="Front-rear axle distance.")
+    length_m: float = Field(gt=0, le=MAX_SIZE_M, description="Body box length a (eq. 2.13).")
+    width_m: float = Field(gt=0, le=MAX_SIZE_M, description="Body box width b (eq. 2.13).")
+    height_m: float = Field(gt=0, le=MAX_SIZE_M, description="Body box height c (eq. 2.13).")
+    encoder_ticks_per_wheel_rev: int = Field(1960, gt=0, le=2**31 - 1)
     n_wheels: int = 4
     com_x_m: float | None = None
     com_y_m: float | None = None
-    com_height_m: float | None = Field(None, gt=0)
+    com_height_m: float | None = Field(None, gt=0, le=MAX_SIZE_M)
     measured_yaw_inertia_kgm2: float | None = Field(None, gt=0)
 
     @field_validator("n_wheels")

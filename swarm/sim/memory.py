@@ -75,7 +75,8 @@ def check_fits(
     source: str | None = None,
     batch: int = 1,
 ) -> int:
-    """Refuse (`InputError` on `swarm.count`) a mission whose `at_once` runs in parallel would need
+    """Refuse (`InputError` on `swarm.count`, or on the phases' time limits when a run's recorded
+    tracks are what does not fit) a mission whose `at_once` runs in parallel would need
     more memory than is available; returns the estimate in bytes for one run (of `batch` runs
     stepped together in one process, `swarm.sim.world`: one map, `batch` times the robots)."""
     bm = mission.beach_map
@@ -89,10 +90,17 @@ def check_fits(
         runs = ""
         if at_once > 1:
             runs = f" x {at_once} runs at once" + (" (fewer --workers would fit)" if one <= free else "")
+        size = f"{cols * bm.cell_m:g} x {rows * bm.cell_m:g} m, {cells:,} cells"
+        found = f"{count} robots on {bm.name} ({size})"
+        key = "swarm.count"
+        instant = estimate_bytes(cells, count * batch, 0.0, simulate=simulate, record_every_s=record_every_s)
+        if instant * at_once <= free:  # the recorded tracks are what do not fit: the run is too long
+            key = "phases (time limits)"
+            found = f"{time_s:g} s of mission time for {count} robots (the phase time limits added up)"
         raise InputError(
             source or mission.source or "mission",
-            "swarm.count",
-            f"{count} robots on {bm.name} ({cols * bm.cell_m:g} x {rows * bm.cell_m:g} m, {cells:,} cells)",
+            key,
+            found,
             f"a run that fits in memory: it needs about {_gb(one)}{runs}, {_gb(free)} is available",
         )
     return one

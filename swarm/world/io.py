@@ -60,6 +60,9 @@ from swarm.robot.terrain import TerrainLibrary, load_library
 from swarm.world.beachmap import REGION_KINDS, BeachMap, Region
 
 GRID_ARRAYS = {"terrain": np.dtype(np.int8), "elevation_m": np.dtype(np.float32)}
+#: Elevations a map may hold (m): the Earth's surface lies within 11 km of sea level (Mariana
+#: Trench -10.9 km, Everest 8.8 km); 3e38 once made every slope 90 degrees.
+MAX_ELEVATION_M = 12_000.0
 _GEOMETRY_KEYS = ("point", "line", "polygon", "geometry")
 
 
@@ -322,6 +325,15 @@ def _load_grid(path: Path) -> tuple[np.ndarray, np.ndarray]:
         row, col = (int(i) for i in np.argwhere(bad)[0])
         raise InputError(
             path, f"elevation_m[{row}, {col}]", f"{bad.sum()} non-finite values", "finite elevations (m)"
+        )
+    far = np.abs(elevation) > MAX_ELEVATION_M
+    if far.any():
+        row, col = (int(i) for i in np.argwhere(far)[0])
+        raise InputError(
+            path,
+            f"elevation_m[{row}, {col}]",
+            float(elevation[row, col]),
+            f"an elevation on Earth, within +-{MAX_ELEVATION_M:g} m",
         )
     return terrain, elevation
 

@@ -434,6 +434,12 @@ def test_parts_must_agree(monkeypatch):
     raw = small_mission()
     raw["tasks"][0]["robots_per_zone"] = 7
     assert_line(error_of(raw, monkeypatch), "tasks[0].robots_per_zone", 7, "at most 6")
+    raw = small_mission()  # each landing task fits the 12 robots alone (8), not both together (16)
+    raw["tasks"][0]["robots_per_zone"] = 4
+    raw["tasks"].append({**raw["tasks"][0], "name": "second_wave"})
+    err = error_of(raw, monkeypatch)
+    together = "at least 16, the robots the stations hold together (tasks[0] 8, tasks[2] 8)"
+    assert_line(err, "swarm.count", 12, together)
     raw = small_mission()
     raw["launch"]["offshore_m"] = 5000.0
     assert_line(error_of(raw, monkeypatch), "launch.offshore_m", 5000.0, "at most 1800 m offshore")

@@ -49,6 +49,7 @@ GOOD = {"planner": "RRTConnect", "objective": "length", "budget": {"iterations":
             "a RRTConnect setting, one of ['intermediate_states', 'range']",
         ),
         ({"params": {"range": "far"}}, "params.range", "a number or true/false"),
+        ({"params": {"range": -5.0}}, "params.range", "metres >= 0"),
         ({"budget": {"iterations": 0}}, "budget.iterations", "a whole number >= 1"),
         ({"budget": {"iterations": 1.5}}, "budget.iterations", "a whole number"),
         ({"budget": {"seconds": 1}}, "budget.seconds", "known keys: iterations, time_s"),

@@ -347,6 +347,15 @@ def test_fractional_ticks_rejected(tmp_path: Path) -> None:
     assert assert_names(exc, path, 2).where == "line 2, column 2 (left_ticks)"
 
 
+def test_tick_count_past_exact_floats_rejected(tmp_path: Path) -> None:
+    """1e30 is a whole float, but no int64: the cast once wrapped it to a jump of 9.2e18 ticks."""
+    path = write(tmp_path, "huge.txt", "0\t0\t0\n26\t1\t1\n52\t0\t1e30\n")
+    with pytest.raises(InputError) as exc:
+        read_encoders(path)
+    assert assert_names(exc, path, 3).where == "line 3, column 3 (right_ticks)"
+    assert exc.value.found == 1e30
+
+
 # ---------------------------------------------------------------------------------------------
 # Counter wrap-around
 

@@ -73,3 +73,14 @@ def test_a_study_counts_the_runs_it_starts_at_once(monkeypatch) -> None:
     with pytest.raises(InputError) as err:
         check_points(LANDING, sweeps, at_once=3)
     assert "x 3 runs at once (fewer --workers would fit)" in str(err.value)
+
+
+def test_a_run_too_long_to_record_blames_the_time_limits(tmp_path, capsys) -> None:
+    """12 robots fit; their tracks over 1e12 s do not: the message names the time, not the count."""
+    out = tmp_path / "out"
+    argv = ["simulate", str(LANDING), "--set", "phases.beach_operations.time_limit_s=1e12", "--out", str(out)]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"swarm: error: {LANDING}: phases (time limits): found '1e+12 s of mission time")
+    assert err.count("\n") == 1
+    assert not out.exists()

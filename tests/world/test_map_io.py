@@ -491,6 +491,8 @@ GOOD_T = np.zeros((ROWS, COLS), np.int8)
 GOOD_Z = np.zeros((ROWS, COLS), np.float32)
 NAN_Z = GOOD_Z.copy()
 NAN_Z[3, 4] = np.nan
+SKY_Z = GOOD_Z.copy()
+SKY_Z[1, 2] = 3e38  # once accepted: every slope 90 degrees
 HIGH_T = GOOD_T.copy()
 HIGH_T[2, 5] = len(CLASSES)
 NPZ_CASES = {
@@ -505,6 +507,7 @@ NPZ_CASES = {
     "shapes": (_npz(terrain=GOOD_T, elevation_m=GOOD_Z[:-1]), "elevation_m", "(39, 60)"),
     "one-d": (_npz(terrain=GOOD_T.ravel(), elevation_m=GOOD_Z.ravel()), "terrain", "(2400,)"),
     "nan": (_npz(terrain=GOOD_T, elevation_m=NAN_Z), "elevation_m[3, 4]", "non-finite"),
+    "off-earth": (_npz(terrain=GOOD_T, elevation_m=SKY_Z), "elevation_m[1, 2]", "within +-12000 m"),
     "class-index": (_npz(terrain=HIGH_T, elevation_m=GOOD_Z), "terrain[2, 5]", "6"),
     "negative-index": (_npz(terrain=-GOOD_T - 1, elevation_m=GOOD_Z), "terrain[0, 0]", "-1"),
 }
