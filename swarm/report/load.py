@@ -1,11 +1,11 @@
 """Reports from files on disk: which kind of output a path is, reading it back, and its `Report`.
 
-| kind         | the folder holds                                  |
-| ---          | ---                                               |
-| `study`      | summary.json and results.parquet                  |
-| `simulation` | outcome.json, events.jsonl and trajectories.npz   |
-| `plan`       | plan.json (and no outcome.json)                   |
-| `validation` | validation.json (and validation.npz)              |
+| kind         | the folder holds                                       |
+| ---          | ---                                                    |
+| `study`      | summary.json and results.parquet                       |
+| `simulation` | outcome.json, events.jsonl and trajectories.npz        |
+| `plan`       | plan.json (and none of the simulation log's files)     |
+| `validation` | validation.json (and validation.npz)                   |
 
 PATH may be the folder or one of those files (its folder is used). The map comes back through the
 files plan.json records (`source.map_file`, `source.terrain_file`) and, for a study, the mission
@@ -40,10 +40,16 @@ from swarm.report.study_report import study_report
 from swarm.report.validation_report import VALIDATION_FILE, read_validation, validation_report
 from swarm.sim.run import LOG_FILES, read_log
 from swarm.studies.evaluate import EVALUATION_FILE
+from swarm.studies.store import RESULTS
+from swarm.studies.table import schema as results_schema
 
 KINDS = ("plan", "simulation", "study", "validation")
-STUDY_FILES = ("summary.json", "results.parquet")
+STUDY_FILES = ("summary.json", RESULTS)
 PLAN_FILE = "plan.json"
+#: The results-table columns a study report rests on: summary.json is computed from them
+#: (`swarm.studies.study.summarize`) and the figures read them. Their types are the writer's
+#: (`swarm.studies.table.schema`); other columns are not read, so not checked.
+RESULT_COLUMNS = ("point", "success", "completed_s", "losses")
 EXPECTED = (
     "a plan (folder with plan.json), a simulation log (outcome.json, events.jsonl, trajectories.npz), "
     "a study (summary.json, results.parquet) or a model validation (validation.json), or one of those files"
@@ -86,6 +92,11 @@ def detect(path: str | Path) -> tuple[str, Path]:
                 p, "(simulation)", f"outcome.json without {', '.join(missing)}", "a whole simulation log"
             )
         return "simulation", p
+    log = [f for f in LOG_FILES if f in has]
+    if log:
+        raise InputError(
+            p, "(simulation)", f"{', '.join(log)} without outcome.json", "a whole simulation log"
+        )
     if PLAN_FILE in has:
         return "plan", p
     if VALIDATION_FILE in has:
@@ -223,7 +234,7 @@ class _Required(_Written):
 class SummaryFile(_Written):
     """A study's summary.json (`swarm.studies.study.run_study`) as `swarm report` reads it."""
 
-    mission: str | None = None
+    mission: str = Field(description="The mission's name, for the report's title.")
     map: str | None = None
     seed: int | None = None
     date: str | None = None
@@ -233,13 +244,13 @@ class SummaryFile(_Written):
     mission_path: str | None = None
     target: float | None = None
     confidence: float = Field(0.95, gt=0, lt=1)
-    runs: _Count | None = None
+    runs: _Count = Field(description="Runs made, one row of results.parquet each.")
     runs_per_point: _Count | None = None
     sweeps: dict[str, list[Any]] = {}
     required: _Required | None = None
     losses_by_cause: dict[str, _Count] = {}
     losses_by_phase: dict[str, dict[str, _Count]] = {}
-    points: list[_PointEntry] = []
+    points: list[_PointEntry] = Field(min_length=1, description="Each parameter point's results.")
 
 
 class _Distribution(_Written):
@@ -291,6 +302,52 @@ def read_plan(folder: str | Path) -> tuple[MissionPlan, dict]:
         ) from None
 
 
+def read_results(path: Path, runs: int) -> pa.Table:
+    """A study's results.parquet, checked against what swarm study writes (`RESULT_COLUMNS`, a row
+    per run of summary.json's `runs`), so a foreign or cut table is one line here rather than a
+    KeyError from a figure or a report of nothing."""
+    try:
+        table = pq.read_table(path)
+    except (OSError, pa.ArrowException) as exc:
+        raise InputError(path, "(file)", str(exc), "a Parquet results table") from None
+    _check_columns(path, table.schema)
+    if table.num_rows != runs:
+        raise InputError(
+            path,
+            "(rows)",
+            f"{table.num_rows} row{'s' if table.num_rows != 1 else ''}",
+            f"one per run: the {runs} runs summary.json counts",
+        )
+    return table
+
+
+def _check_columns(path: Path, found: pa.Schema) -> None:
+    """Each of `RESULT_COLUMNS` there once, with the type the study's writer gives it."""
+    missing = [c for c in RESULT_COLUMNS if c not in found.names]
+    if missing:
+        raise InputError(
+            path,
+            "(columns)",
+            _listing(found.names),
+            f"the columns swarm study writes, including {', '.join(missing)}",
+        )
+    written = results_schema([])
+    for c in RESULT_COLUMNS:
+        at = found.get_all_field_indices(c)
+        if len(at) > 1:
+            raise InputError(path, f"column {c}", f"{len(at)} columns of that name", "one")
+        kind, want = found.field(at[0]).type, written.field(c).type
+        if not kind.equals(want):
+            raise InputError(path, f"column {c}", str(kind), f"{want}, as swarm study writes it")
+
+
+def _listing(names: list[str], most: int = 8) -> str:
+    """'columns a, b, ...': the first `most` names, so a wide foreign table stays one short line."""
+    if not names:
+        return "no columns"
+    return f"columns {', '.join(names[:most])}{', ...' if len(names) > most else ''}"
+
+
 def _study_map(folder: Path, summary: dict):
     """The study's map, through its mission file (as given, else as study.json resolved it)."""
     from swarm.mission.load import load_mission
@@ -330,13 +387,8 @@ def report_for(path: str | Path, *, date: str | None = None) -> Report:
         return _guard(folder / "outcome.json", lambda: sim_report(log, date=date))
     if kind == "study":
         summary = read_json(folder / "summary.json", "summary.json")
-        validate(SummaryFile, summary, folder / "summary.json")
-        try:
-            table = pq.read_table(folder / "results.parquet")
-        except (OSError, pa.ArrowException) as exc:
-            raise InputError(
-                folder / "results.parquet", "(file)", str(exc), "a Parquet results table"
-            ) from None
+        runs = validate(SummaryFile, summary, folder / "summary.json").runs
+        table = read_results(folder / RESULTS, runs)
         beach = _study_map(folder, summary)
         no_map = "No map: the study's mission file could not be found." if beach is None else "No map given."
         return _guard(

@@ -446,3 +446,116 @@ def test_damaged_files_are_input_errors(folders, tmp_path):
     (plan / "plan.json").write_text('{"mission": "x", "robots": [{"id": 1}]}')
     code, _, err = run("report", plan)
     assert code == 2 and err.count("\n") == 1 and "plan.json" in err
+
+
+# --- foreign, cut and half-deleted result folders ---------------------------------------------------------
+def _files(folder: Path) -> dict[str, bytes]:
+    """Every file under `folder` and its bytes: what a failed report must leave as it found it."""
+    return {str(p.relative_to(folder)): p.read_bytes() for p in sorted(folder.rglob("*")) if p.is_file()}
+
+
+def _refused(folder: Path, message: str) -> None:
+    """`swarm report` in each format: exit 2, `message` as the one line, the folder untouched."""
+    before = _files(folder)
+    assert {"report.html", "report.md", "report.json"} <= set(before)  # good reports to keep
+    for fmt in ("html", "md", "json"):
+        code, out, err = run("report", folder, "--format", fmt)
+        assert (code, out, err) == (2, "", f"swarm: error: {message}\n")
+    assert _files(folder) == before
+
+
+@pytest.mark.parametrize("dropped", [None, "point", "success", "completed_s"])
+def test_a_foreign_or_cut_results_table_is_one_line(folders, tmp_path, dropped):
+    """A results.parquet swarm study did not write (None: a table of one column `a`), or one with a
+    column the report needs dropped, is named with the columns found and the ones expected, not a
+    KeyError from a figure or a silent report."""
+    import shutil
+
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    study = tmp_path / "study"
+    shutil.copytree(folders["study"], study)
+    table = pq.read_table(study / "results.parquet")
+    if dropped is None:
+        table, missing = pa.table({"a": [1, 2]}), "point, success, completed_s, losses"
+    else:
+        table, missing = table.drop_columns([dropped]), dropped
+    pq.write_table(table, study / "results.parquet")
+    found = ", ".join(table.column_names[:8]) + (", ..." if table.num_columns > 8 else "")
+    expected = f"the columns swarm study writes, including {missing}"
+    _refused(study, f"{study / 'results.parquet'}: (columns): found 'columns {found}', expected {expected}")
+
+
+def test_a_results_column_of_another_type_is_one_line(folders, tmp_path):
+    """A needed column of another type than the one swarm study writes it with."""
+    import shutil
+
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    study = tmp_path / "study"
+    shutil.copytree(folders["study"], study)
+    path = study / "results.parquet"
+    table = pq.read_table(path)
+    at = table.schema.get_field_index("point")
+    pq.write_table(table.set_column(at, "point", table["point"].cast(pa.string())), path)
+    _refused(study, f"{path}: column point: found 'string', expected int32, as swarm study writes it")
+
+
+@pytest.mark.parametrize(("rows", "found"), [(0, "0 rows"), (1, "1 row")])
+def test_a_results_table_without_the_summary_s_runs_is_one_line(folders, tmp_path, rows, found):
+    """A table cut short (or emptied) while summary.json says runs were made: both numbers."""
+    import shutil
+
+    import pyarrow.parquet as pq
+
+    study = tmp_path / "study"
+    shutil.copytree(folders["study"], study)
+    path = study / "results.parquet"
+    table = pq.read_table(path)
+    assert json.loads((study / "summary.json").read_text())["runs"] == table.num_rows == 6
+    pq.write_table(table.slice(0, rows), path)
+    _refused(study, f"{path}: (rows): found {found!r}, expected one per run: the 6 runs summary.json counts")
+
+
+@pytest.mark.parametrize(
+    ("edit", "where", "found", "expected"),
+    [
+        (lambda s: {}, "mission", "nothing",
+         "the required key 'mission': The mission's name, for the report's title"),
+        (lambda s: {k: v for k, v in s.items() if k != "runs"}, "runs", "nothing",
+         "the required key 'runs': Runs made, one row of results.parquet each"),
+        (lambda s: s | {"points": []}, "points", [], "a list of at least 1 item"),
+    ],
+    ids=["empty", "no runs", "no points"],
+)  # fmt: skip
+def test_a_summary_without_its_required_keys_is_one_line(folders, tmp_path, edit, where, found, expected):
+    """summary.json `{}` (or without runs or points) is not a report of 'unknown on unknown, 0 runs'."""
+    import shutil
+
+    study = tmp_path / "study"
+    shutil.copytree(folders["study"], study)
+    path = study / "summary.json"
+    path.write_text(json.dumps(edit(json.loads(path.read_text()))))
+    _refused(study, f"{path}: {where}: found {found!r}, expected {expected}")
+
+
+@pytest.mark.parametrize("kept", [("trajectories.npz", "events.jsonl"), ("events.jsonl",)])
+def test_a_simulation_without_outcome_json_is_not_a_plan(folders, tmp_path, kept):
+    """A simulation folder whose outcome.json is gone still holds plan.json: it must not be reported
+    (and its report.html overwritten) as a plan."""
+    import shutil
+
+    sim = tmp_path / "sim"
+    shutil.copytree(folders["simulation"], sim)
+    for name in ("outcome.json", "trajectories.npz", "events.jsonl"):
+        if name not in kept:
+            (sim / name).unlink()
+    assert (sim / "plan.json").is_file()
+    found = f"{', '.join(kept)} without outcome.json"
+    message = f"{sim}: (simulation): found {found!r}, expected a whole simulation log"
+    with pytest.raises(InputError) as err:
+        detect(sim / kept[0])
+    assert str(err.value) == message
+    _refused(sim, message)
