@@ -193,6 +193,25 @@ def _check_folder(path: Path | None, option: str) -> None:
         )
 
 
+#: A progress bar is drawn once its work has run this long (s): input refused at the start of the
+#: work (a study's resume check, a map no robot can drive on) leaves only its one line on stderr.
+BAR_DELAY_S = 1.0
+
+
+def _bar(**kwargs):
+    """The commands' progress bar on stderr (tqdm), drawn after `BAR_DELAY_S`, whether it moves by
+    `update` or by setting its count and calling `refresh` (which tqdm draws at once)."""
+    from tqdm import tqdm
+
+    class Delayed(tqdm):
+        def refresh(self, *args, **kw):
+            if self._time() >= self.start_t + self.delay:
+                return super().refresh(*args, **kw)
+            return None
+
+    return Delayed(file=sys.stderr, delay=BAR_DELAY_S, **kwargs)
+
+
 def _path(text: str) -> Path:
     """A path argument; an empty one is refused (Path("") is the current folder)."""
     if not text.strip():
@@ -366,8 +385,6 @@ def _cmd_validate(args: argparse.Namespace) -> int:
 
 
 def _cmd_calibrate(args: argparse.Namespace) -> int:
-    from tqdm import tqdm
-
     from swarm.robot.calibrate import COM_PARAMS, MODEL_BOUNDS, calibrate, write_calibration
     from swarm.robot.params import load_robot
 
@@ -396,7 +413,7 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
         raise InputError("command line", "--max-evaluations", args.max_evaluations, "a positive integer")
     if not args.json:
         print(f"fitting {args.model} coefficients, starting from terrain {chosen}", file=sys.stderr)
-    with tqdm(desc=f"calibrating {args.model}", unit="sim", disable=args.json, file=sys.stderr) as bar:
+    with _bar(desc=f"calibrating {args.model}", unit="sim", disable=args.json) as bar:
         result = calibrate(
             runs,
             robot,
@@ -653,8 +670,6 @@ def _add_plan_command(commands) -> None:
 def _cmd_plan(args: argparse.Namespace) -> int:
     import time
 
-    from tqdm import tqdm
-
     from swarm.mission import load_mission
     from swarm.mission.plan import plan_mission, write_plan
     from swarm.report.document import today
@@ -678,7 +693,7 @@ def _cmd_plan(args: argparse.Namespace) -> int:
     if out.exists() and not out.is_dir():
         raise InputError("command line", "--out", str(out), "a folder (this is a file)")
     with _output_folder(out, args, "plan"):
-        with tqdm(desc="planning routes", unit="route", file=sys.stderr, leave=False) as bar:
+        with _bar(desc="planning routes", unit="route", leave=False) as bar:
 
             def progress(done: int, total: int) -> None:
                 bar.total = total
@@ -692,7 +707,7 @@ def _cmd_plan(args: argparse.Namespace) -> int:
         if args.evaluate:
             from swarm.studies.evaluate import EVALUATION_FILE, evaluate_plan
 
-            with tqdm(desc="evaluating", unit="run", file=sys.stderr, leave=False) as bar:
+            with _bar(desc="evaluating", unit="run", leave=False) as bar:
 
                 def run_progress(done: int, total: int) -> None:
                     bar.total = total
@@ -802,8 +817,6 @@ def _overrides(pairs: Sequence[str]) -> dict[str, object]:
 def _cmd_simulate(args: argparse.Namespace) -> int:
     import time
 
-    from tqdm import tqdm
-
     from swarm.mission import load_mission
     from swarm.mission.plan import plan_mission, write_plan
     from swarm.report.document import today
@@ -832,7 +845,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     with _output_folder(out, args, "simulation"):
         seed = mission.seed if args.seed is None else args.seed
 
-        with tqdm(desc="planning routes", unit="route", file=sys.stderr, leave=False) as bar:
+        with _bar(desc="planning routes", unit="route", leave=False) as bar:
 
             def plan_progress(done: int, total: int) -> None:
                 bar.total = total
@@ -842,7 +855,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
             plan_seed = mission.seed if args.plan_seed is None else args.plan_seed
             plan = plan_mission(mission, seed=plan_seed, progress=plan_progress, workers=args.workers)
 
-        with tqdm(desc="simulating", unit="s", file=sys.stderr, leave=False) as bar:
+        with _bar(desc="simulating", unit="s", leave=False) as bar:
 
             def sim_progress(t_s: float, limit_s: float) -> None:
                 if bar.total is None:
@@ -1056,7 +1069,6 @@ def _add_study_command(commands) -> None:
 
 
 def _cmd_study(args: argparse.Namespace) -> int:
-    from tqdm import tqdm
 
     from swarm.report.study_report import answer, study_rows, write_study_report
     from swarm.studies.backends import default_workers
@@ -1098,7 +1110,7 @@ def _cmd_study(args: argparse.Namespace) -> int:
         local = args.backend == "local"  # Ray's workers have their own machines' memory
         check_points(spec.mission_path, sweeps, at_once=(args.workers or default_workers()) if local else 1)
 
-        with tqdm(desc="study", unit="run", file=sys.stderr, dynamic_ncols=True) as bar:
+        with _bar(desc="study", unit="run", dynamic_ncols=True) as bar:
 
             def progress(done: int, total: int) -> None:
                 if bar.total is None:

@@ -89,3 +89,16 @@ def test_an_empty_path_and_a_bad_number_are_one_line(capsys) -> None:
         assert exit_.value.code == 2
         err = capsys.readouterr().err
         assert err == f"swarm {argv[0]}: error: {says} (see swarm {argv[0]} --help)\n"
+
+
+def test_a_refused_resume_is_one_line_without_a_progress_bar(tmp_path, capfd) -> None:
+    """The study's bar once drew 'study: 0run' twice before the error: a bar waits a second."""
+    landing = str(REPO / "missions" / "landing.yaml")
+    out = tmp_path / "study"
+    args = ["study", landing, "--workers", "1", "--batch", "1", "--out", str(out)]
+    assert main([*args, "--runs", "1"]) == 0
+    capfd.readouterr()
+    assert main([*args, "--runs", "2"]) == 2
+    err = capfd.readouterr().err
+    assert len(err.splitlines()) == 1 and err.startswith("swarm: error: "), err
+    assert "a different study" in err
