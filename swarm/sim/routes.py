@@ -162,6 +162,11 @@ class Routes:
         """Robots offset .. offset + n - 1 as a `Routes` of their own (one run of a batch)."""
         return RoutesView(self, offset, n)
 
+    def __setstate__(self, state: dict) -> None:
+        """A copy's `points` a view of its own store again (pickle copies a view as an array)."""
+        self.__dict__.update(state)
+        self.points = self._store[: self._used]
+
 
 class RoutesView:
     """One run's robots of a batch's `Routes`: the same methods, robot indices local to the run."""

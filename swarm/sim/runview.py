@@ -64,9 +64,7 @@ class RunView:
         self.setup = setup
         self.n = setup.n
         self.offset = b * setup.n
-        for name in ROBOT_ARRAYS:
-            setattr(self, name, getattr(world, name)[b])
-        self.routes = world.routes.view(self.offset, self.n)
+        self.bind()
         self.possible_agents = world.possible_agents
         self.agent_index = world.agent_index
         self.router = setup.router.fork()
@@ -75,6 +73,22 @@ class RunView:
         self.events: list[dict] = []
         self.end_reason: list[str | None] = [None] * self.n
         self._object_marker = np.empty(0, dtype=np.int64)
+
+    def bind(self) -> None:
+        """Make this run's views of its world's arrays: the per-robot arrays, its routes and its
+        sensor's last positions (again in a copy of the world: `World.__setstate__`)."""
+        for name in ROBOT_ARRAYS:
+            setattr(self, name, getattr(self.world, name)[self.b])
+        self.routes = self.world.routes.view(self.offset, self.n)
+        if getattr(self, "sensor", None) is not None:
+            self.sensor._last_xy = self.world.sense_rows(self.b)
+
+    def __getstate__(self) -> dict:
+        """Without the views (`bind` makes them again): pickled, each would be an array of its own."""
+        state = self.__dict__.copy()
+        for name in (*ROBOT_ARRAYS, "routes"):
+            state.pop(name, None)
+        return state
 
     @property
     def object_marker(self) -> np.ndarray:

@@ -159,6 +159,24 @@ class World:
         self.hazard_model: hazards.HazardModel | None = None
         self.sensors: SensorBatch | None = None
 
+    def sense_rows(self, b: int) -> np.ndarray:
+        """Run b's rows of the sensors' last positions, a view (its `MineSensor` keeps them)."""
+        return self._sense_xy[b * self.n : (b + 1) * self.n]
+
+    def __getstate__(self) -> dict:
+        """A copy (pickle, `copy.deepcopy`: SuperSuit's `concat_vec_envs_v1` copies an env so)
+        keeps every array; the caches of views and generator lists are made again as used."""
+        state = self.__dict__.copy()
+        state["_flat"], state["_streams"], state["_typed_streams"] = {}, {}, {}
+        return state
+
+    def __setstate__(self, state: dict) -> None:
+        """The runs' views made again, of this copy's arrays: pickle copies a view as an array
+        of its own, and a copy whose runs wrote to those would never move (`RunView.bind`)."""
+        self.__dict__.update(state)
+        for run in self.runs:
+            run.bind()
+
     def flat(self, name: str) -> np.ndarray:
         """A per-robot array as (B * n, ...), a view (the arrays are never rebound, so the views
         are made once)."""
@@ -222,7 +240,7 @@ class World:
             if s.search_task is not None
             else None
         )
-        last = self._sense_xy[b * n : (b + 1) * n]
+        last = self.sense_rows(b)
         last[:] = np.nan
         if run.sensor is not None:
             run.sensor._last_xy = last

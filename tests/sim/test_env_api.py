@@ -399,3 +399,53 @@ def test_wheel_actions_do_not_move_robots_before_they_reach_the_map(missions: di
         env.step({a: np.ones(3, np.float32) for a in env.agents})
     assert not env.on_map.any()
     np.testing.assert_array_equal(env.robot_state, start)
+
+
+def _continue(env: SwarmEnv, steps: int, action_seed: int) -> list[tuple]:
+    rng = np.random.default_rng(action_seed)
+    out = []
+    for _ in range(steps):
+        if not env.agents:
+            break
+        out.append((*env.step(_actions(rng, env)), env.state()))
+    return out
+
+
+@pytest.mark.parametrize("how", ["pickle", "deepcopy"])
+def test_a_copied_env_goes_on_as_the_original(missions: dict[str, Path], how: str) -> None:
+    """SuperSuit's `concat_vec_envs_v1` copies an env with cloudpickle: the copy's robots once never
+    moved (its runs wrote to arrays pickle had cut loose from the world's). Both go on alike."""
+    import copy
+    import pickle
+
+    env = swarm.sim.parallel_env(mission=missions["hazardous"])
+    for _ in _episode(env, 3, 40):
+        pass
+    twin = pickle.loads(pickle.dumps(env)) if how == "pickle" else copy.deepcopy(env)
+    start = env.robot_state.copy()
+    ours, theirs = _continue(env, 120, 5), _continue(twin, 120, 5)
+    assert len(ours) == len(theirs) == 120
+    for k, (a, b) in enumerate(zip(ours, theirs, strict=True)):
+        _assert_same_step(a, b, k)
+    assert env.events == twin.events
+    moved = np.hypot(*(twin.robot_state[:, :2] - start[:, :2]).T)
+    assert (moved[twin.alive] > 1.0).all()  # every robot still in the mission drove on
+    assert not np.shares_memory(env.robot_state, twin.robot_state)
+
+
+def test_a_copied_vector_env_goes_on_as_the_original(missions: dict[str, Path]) -> None:
+    import pickle
+
+    vec = swarm.sim.vector_env(mission=missions["hazardous"], num_envs=3, seed=4)
+    vec.reset()
+    rng = np.random.default_rng(1)
+    actions = rng.uniform(-1, 1, (80, 3, vec.n, 3)).astype(np.float32)
+    for a in actions[:20]:
+        vec.step(a)
+    twin = pickle.loads(pickle.dumps(vec))
+    for a in actions[20:]:
+        got, want = twin.step(a), vec.step(a)
+        for x, y in zip(got[:4], want[:4], strict=True):
+            np.testing.assert_array_equal(x, y)
+    np.testing.assert_array_equal(twin.world.robot_state, vec.world.robot_state)
+    assert [r.events for r in twin.world.runs] == [r.events for r in vec.world.runs]
