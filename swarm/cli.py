@@ -205,7 +205,8 @@ def _bar(**kwargs):
 
     class Delayed(tqdm):
         def refresh(self, *args, **kw):
-            if self._time() >= self.start_t + self.delay:
+            start = getattr(self, "start_t", None)  # None: tqdm's own first draw (no delay)
+            if start is None or self._time() >= start + self.delay:
                 return super().refresh(*args, **kw)
             return None
 

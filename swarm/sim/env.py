@@ -43,6 +43,10 @@ Actions (`action_mode`):
 - "command": Dict(command=Discrete(6), target=Box(2)): `COMMANDS` = follow the planned route, go to
   the target point (straight), loiter, mark the object nearest the target, hold as a relay, return to
   sea. The built-in controller (`swarm.sim.control`) turns commands into wheel and jet commands.
+Every action of a step is checked before any is applied (`swarm.sim.actions`): a NaN, a wrong
+shape, an unknown agent id or a target off the map is a `SwarmError` naming the agent, and the
+step changes nothing. A copy of an env (pickle, `copy.deepcopy`, as SuperSuit's vector wrappers
+make one) goes on exactly as the original would.
 
 Observations are fixed-shape float32 Boxes (`swarm.sim.layout`); `state()` is the global state for
 centralized critics. `step_arrays` is `step` on arrays over all robots (rows in `possible_agents`
@@ -76,6 +80,8 @@ reshuffle another's draws.
 from __future__ import annotations
 
 import functools
+import os
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -88,6 +94,7 @@ from swarm.errors import SwarmError
 from swarm.mission.load import load_mission
 from swarm.mission.plan import MissionPlan, plan_mission
 from swarm.mission.schema import Mission
+from swarm.sim.actions import Commands, wheel_array, wheel_rows
 from swarm.sim.layout import (
     GLOBAL_FIELDS,
     PHASES,
@@ -185,7 +192,29 @@ class SimConfig:
             raise SwarmError("sim: patch_size must be >= 1 and neighbours >= 0")
 
 
+def is_whole(value: object) -> bool:
+    """An int (numpy's too), not a bool: a float or a string is refused, not rounded or parsed."""
+    return isinstance(value, int | np.integer) and not isinstance(value, bool)
+
+
+def check_seed(seed: object) -> int | None:
+    """A reset's seed: None (fresh entropy) or a whole number >= 0, as `numpy.random.SeedSequence`
+    takes it."""
+    if seed is None:
+        return None
+    if not is_whole(seed) or seed < 0:  # type: ignore[operator]
+        raise SwarmError(f"sim: seed {seed!r}, expected None or a whole number >= 0")
+    return int(seed)  # type: ignore[call-overload]
+
+
 def _as_mission(mission: str | Path | Mission, overrides: dict[str, Any] | None) -> Mission:
+    if not isinstance(mission, str | os.PathLike | Mission):
+        raise SwarmError(f"sim: mission {mission!r}, expected a mission file's path or a Mission")
+    if overrides is not None and (
+        not isinstance(overrides, Mapping) or not all(isinstance(k, str) for k in overrides)
+    ):
+        expected = "a dict of dotted keys to values, e.g. {'swarm.count': 20}"
+        raise SwarmError(f"sim: overrides {overrides!r}, expected {expected}")
     if isinstance(mission, Mission):
         if overrides:
             source = mission.source
@@ -228,6 +257,8 @@ class SwarmEnv(ParallelEnv):
             raise SwarmError(
                 f"sim: render_mode {render_mode!r}, expected one of {self.metadata['render_modes']}"
             )
+        if config is not None and not isinstance(config, SimConfig):
+            raise SwarmError(f"sim: config {config!r}, expected a SimConfig (or None)")
         self.config = config or SimConfig()
         self.action_mode = action_mode
         self.render_mode = render_mode
@@ -276,26 +307,34 @@ class SwarmEnv(ParallelEnv):
                     ),
                 }
             )
+        self._command_check = Commands(self.beach.bounds_m)
         self.state_space = gymnasium.spaces.Box(-np.inf, np.inf, (state_size(self.n),), np.float32)
         self.observer = Observer(setup, self.layout, world.B)
         self._renderer = None
         self.agents: list[str] = []
+        self._was_reset = False  # step() before reset() is an error, as in Gymnasium's checker
         if self.owns_world:
             self._reset_state(0)  # arrays exist before the first reset (spaces, render)
             self.run.seed_seq = None  # ...but an unseeded first reset() draws fresh entropy
 
     # spaces -----------------------------------------------------------------------------------------
-    @functools.cache  # noqa: B019 (one space object per agent, as PettingZoo expects)
     def observation_space(self, agent: str) -> gymnasium.spaces.Space:
+        """The space of `agent`'s observations: one object every robot shares."""
+        self._check_agent(agent)
         return self._observation_box
 
     @functools.cached_property
     def _observation_box(self) -> gymnasium.spaces.Box:
         return self.observation_box()
 
-    @functools.cache  # noqa: B019
     def action_space(self, agent: str) -> gymnasium.spaces.Space:
+        """The space of `agent`'s actions: one object every robot shares."""
+        self._check_agent(agent)
         return self._act_space
+
+    def _check_agent(self, agent: object) -> None:
+        if not isinstance(agent, str) or agent not in self.agent_index:
+            raise SwarmError(f"sim: agent {agent!r}, expected one of robot_0 .. robot_{self.n - 1}")
 
     # reset ------------------------------------------------------------------------------------------
     def _reset_state(self, seed: int | None) -> None:
@@ -327,7 +366,8 @@ class SwarmEnv(ParallelEnv):
     def reset_arrays(self, seed: int | None = None) -> np.ndarray:
         """`reset` on arrays: (n, obs_dim) every robot's observation, rows in `possible_agents`
         order (infos: `info(robots)`)."""
-        self._reset_state(seed)
+        self._reset_state(check_seed(seed))
+        self._was_reset = True
         return self.observe()
 
     # step ---------------------------------------------------------------------------------------------
@@ -412,6 +452,8 @@ class SwarmEnv(ParallelEnv):
 
     def _advance(self, actions: dict[str, Any] | np.ndarray) -> tuple[np.ndarray, bool, float]:
         """One step of the world; returns who the world ended, whether time ran out, the reward."""
+        if not self._was_reset:
+            raise SwarmError("sim: step() before reset()")
         if not self.agents:
             raise SwarmError("sim: step() after the episode ended; call reset()")
         if not self.owns_world:
@@ -432,6 +474,8 @@ class SwarmEnv(ParallelEnv):
 
     # actions --------------------------------------------------------------------------------------
     def _commands(self, actions: dict[str, Any] | np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Wheel and jet commands from the step's actions, every one checked before any is
+        applied (`swarm.sim.actions`)."""
         n = self.n
         wheels = np.zeros((n, 2))
         jet = np.zeros(n)
@@ -441,28 +485,26 @@ class SwarmEnv(ParallelEnv):
                 raise SwarmError(f"sim: actions of shape {actions.shape}, expected ({n}, 3)")
             idx = self._agent_idx
             if self.action_mode == "command":
-                for i, (cmd, tx, ty) in zip(idx.tolist(), actions[idx].tolist(), strict=True):
-                    self.set_command(i, int(cmd), np.array([tx, ty]))
+                for i, cmd, target in self._command_check.from_rows(actions, idx):
+                    self.set_command(i, cmd, target)
                 return self.controller_commands()
-            act = np.clip(actions[idx].astype(np.float64), -1.0, 1.0)
-            wheels[idx] = act[:, :2] * (limits.max_wheel_speed_mps / limits.wheel_radius_m)
-            jet[idx] = act[:, 2] * limits.jet_thrust_max_n
-            return wheels, jet
-        if self.action_mode == "wheels":
-            if actions:
-                names = list(actions)
-                if names == self.agents:  # the usual case: every live agent, in order
-                    idx = self._agent_idx
-                else:
-                    idx = np.fromiter((self.agent_index[a] for a in names), np.intp, len(names))
-                act = np.clip(np.array(list(actions.values()), dtype=np.float64).reshape(-1, 3), -1.0, 1.0)
-                wheels[idx] = act[:, :2] * (limits.max_wheel_speed_mps / limits.wheel_radius_m)
-                jet[idx] = act[:, 2] * limits.jet_thrust_max_n
-            return wheels, jet
-        for a, act in actions.items():
-            i = self.agent_index[a]
-            self.set_command(i, int(act["command"]), np.asarray(act["target"], dtype=np.float64))
-        return self.controller_commands()
+            live = np.zeros(n, bool)
+            live[idx] = True
+            act = wheel_array(actions, live)[idx]
+        elif not isinstance(actions, Mapping):
+            raise SwarmError(
+                f"sim: actions of type {type(actions).__name__}, expected a dict of agent id to action"
+                f" (or step_arrays with an ({n}, 3) array)"
+            )
+        elif self.action_mode == "command":
+            for i, cmd, target in self._command_check.from_dict(actions, self.agent_index):
+                self.set_command(i, cmd, target)
+            return self.controller_commands()
+        else:
+            idx, act = wheel_rows(actions, self.agent_index)
+        wheels[idx] = act[:, :2] * (limits.max_wheel_speed_mps / limits.wheel_radius_m)
+        jet[idx] = act[:, 2] * limits.jet_thrust_max_n
+        return wheels, jet
 
     def set_command(self, i: int, command: int, target: np.ndarray | None = None) -> None:
         """Give robot i a high-level command (`COMMANDS`); used by command mode and the policy."""

@@ -33,6 +33,7 @@ from torchrl.data import Binary, Bounded, Composite, Unbounded
 from torchrl.envs import EnvBase
 
 from swarm.errors import SwarmError
+from swarm.sim.env import check_seed
 from swarm.sim.vector import SwarmVectorEnv
 
 GROUP = "robot"
@@ -105,13 +106,16 @@ class SwarmTorchEnv(EnvBase):
             # the runs the vector env has just reset: their new episodes, as already made
             obs, mask = self._next_obs, self._next_mask
             self._pending = None
-        elif want is None or want.all() or self._pending is None:
+        elif want is None or want.all():
             obs, infos = self.vec.reset(seed=self._seed)
             self._seed = None
             mask = infos["agent_mask"]
             self._pending = None
         else:
-            raise SwarmError("sim: SwarmTorchEnv resets the runs whose episodes ended, or all of them")
+            raise SwarmError(
+                f"sim: SwarmTorchEnv resets the runs whose episodes ended, or all of them; asked for runs"
+                f" {np.flatnonzero(want).tolist()} of {len(want)}"
+            )
         self._last_obs, self._last_mask = obs, mask
         td = self._obs_td(obs, mask)
         b = obs.shape[0]
@@ -146,4 +150,4 @@ class SwarmTorchEnv(EnvBase):
         return td
 
     def _set_seed(self, seed: int | None) -> None:
-        self._seed = None if seed is None else int(seed)
+        self._seed = check_seed(seed)

@@ -50,7 +50,8 @@ import numpy as np
 from swarm.errors import SwarmError
 from swarm.mission.plan import MissionPlan
 from swarm.mission.schema import Mission
-from swarm.sim.env import COMMANDS, SimConfig, StepOutcome, SwarmEnv
+from swarm.sim.actions import wheel_array
+from swarm.sim.env import COMMANDS, SimConfig, StepOutcome, SwarmEnv, check_seed, is_whole
 from swarm.sim.observe import Observer
 from swarm.sim.world import World
 
@@ -82,8 +83,12 @@ class SwarmVectorEnv:
         plan_workers: int | None = 1,
         env_class: type[SwarmEnv] = SwarmEnv,
     ) -> None:
-        if num_envs < 1:
-            raise SwarmError(f"sim: num_envs {num_envs}, expected at least 1")
+        if not is_whole(num_envs) or num_envs < 1:
+            raise SwarmError(f"sim: num_envs {num_envs!r}, expected a whole number >= 1")
+        if not isinstance(normalize_obs, bool | np.bool_):
+            raise SwarmError(f"sim: normalize_obs {normalize_obs!r}, expected True or False")
+        num_envs = int(num_envs)
+        check_seed(seed)
         opts = {"action_mode": action_mode, "config": config, "max_cycles": max_cycles}
         first = env_class(mission, overrides, plan=plan, plan_workers=plan_workers, **opts)
         cfg = first.config
@@ -123,7 +128,7 @@ class SwarmVectorEnv:
             self.single_observation_space = raw
         if action_mode == "wheels":
             self.single_action_space = first.action_space(first.possible_agents[0])
-        else:  # command index (floored), target x, y (m): one row of floats
+        else:  # command index (a whole number), target x, y (m): one row of floats
             x0, y0, x1, y1 = first.beach.bounds_m
             self.single_action_space = gymnasium.spaces.Box(
                 np.array([0.0, x0, y0], np.float32),
@@ -175,16 +180,22 @@ class SwarmVectorEnv:
         return np.stack([self.envs[b].observe() for b in runs])
 
     def _commands(self, actions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Wheel (B, n, 2) and jet (B, n) commands from the actions of the robots in the mission."""
+        """Wheel (B, n, 2) and jet (B, n) commands from the actions of the robots in the mission,
+        every one checked before any is applied (`swarm.sim.actions`)."""
         inside = self.world.in_agents
         if self.action_mode == "command":
-            for b, env in enumerate(self.envs):
-                idx = np.flatnonzero(inside[b])
-                for i, (cmd, tx, ty) in zip(idx.tolist(), actions[b, idx].tolist(), strict=True):
-                    env.set_command(i, int(cmd), np.array([tx, ty]))
+            if actions.dtype.kind not in "iuf":
+                raise SwarmError(f"sim: actions of dtype {actions.dtype}, expected numbers")
+            check = self.envs[0]._command_check
+            given = [
+                check.from_rows(actions[b], np.flatnonzero(row), f"run {b}, ") for b, row in enumerate(inside)
+            ]
+            for env, rows in zip(self.envs, given, strict=True):
+                for i, cmd, target in rows:
+                    env.set_command(i, cmd, target)
             return self.world.controller_commands()
         lim = self.limits
-        act = np.clip(actions.astype(np.float64), -1.0, 1.0)
+        act = wheel_array(actions, inside)
         wheels = np.where(
             inside[..., None], act[..., :2] * (lim.max_wheel_speed_mps / lim.wheel_radius_m), 0.0
         )
@@ -196,7 +207,7 @@ class SwarmVectorEnv:
         """Every run to a new episode: with `seed`, each run's stream from its start (episode 0);
         without, each run's next episode (the first reset uses the constructor's `seed`, fresh
         entropy if that is None). Returns observations (B, n, obs_dim) and infos."""
-        if seed is not None:
+        if check_seed(seed) is not None:
             self._root, self._episode[:] = int(seed), 0
         elif self._root is None:
             self._root = self.seed if self.seed is not None else int(np.random.SeedSequence().entropy)
@@ -277,13 +288,19 @@ class SwarmVectorEnv:
         """Raw observations (..., obs_dim) to [-1, 1] by their bounds (only with normalize_obs)."""
         if not self.normalize_obs:
             raise SwarmError("sim: normalize() needs vector_env(..., normalize_obs=True)")
-        return (np.asarray(obs, np.float32) - self._centre) / self._half
+        return (self._obs_rows(obs) - self._centre) / self._half
 
     def denormalize(self, obs: np.ndarray) -> np.ndarray:
         """The inverse of `normalize`: observations in [-1, 1] back to raw units."""
         if not self.normalize_obs:
             raise SwarmError("sim: denormalize() needs vector_env(..., normalize_obs=True)")
-        return np.asarray(obs, np.float32) * self._half + self._centre
+        return self._obs_rows(obs) * self._half + self._centre
+
+    def _obs_rows(self, obs: np.ndarray) -> np.ndarray:
+        out = np.asarray(obs, np.float32)
+        if out.shape[-1:] != (self.obs_dim,):
+            raise SwarmError(f"sim: observations of shape {out.shape}, expected (..., {self.obs_dim})")
+        return out
 
     def _finish_obs(self, raw: np.ndarray, rows: np.ndarray, keep_raw: bool = False) -> np.ndarray:
         """Scaled if asked, with the rows of robots out of the mission zero; in place in `raw`

@@ -96,6 +96,9 @@ class World:
     ) -> None:
         if runs < 1:
             raise SwarmError(f"sim: a world needs at least one run, found {runs}")
+        whole = isinstance(max_cycles, int | np.integer) and not isinstance(max_cycles, bool)
+        if max_cycles is not None and (not whole or max_cycles < 1):
+            raise SwarmError(f"sim: max_cycles {max_cycles!r}, expected None or a whole number >= 1")
         b, n = int(runs), setup.n
         self.setup = setup
         self.B, self.n = b, n

@@ -21,7 +21,7 @@ from pettingzoo.test import api_test, parallel_api_test
 from tiny_missions import write_mission
 
 import swarm.sim
-from swarm.errors import InputError
+from swarm.errors import InputError, SwarmError
 from swarm.sim.env import SwarmEnv
 from swarm.sim.hazards import CAUSES
 from swarm.sim.layout import STATE_FIELDS
@@ -449,3 +449,80 @@ def test_a_copied_vector_env_goes_on_as_the_original(missions: dict[str, Path]) 
             np.testing.assert_array_equal(x, y)
     np.testing.assert_array_equal(twin.world.robot_state, vec.world.robot_state)
     assert [r.events for r in twin.world.runs] == [r.events for r in vec.world.runs]
+
+
+def _warm(env: SwarmEnv, steps: int = 20) -> SwarmEnv:
+    env.reset(seed=0)
+    for _ in range(steps):
+        env.step(_actions(np.random.default_rng(0), env))
+    return env
+
+
+#: (action mode, what the first live agent is given, the error's words)
+BAD_ACTIONS = [
+    ("wheels", np.array([np.nan, 0.0, 0.0], np.float32), "action of robot_0: found array([nan,"),
+    ("wheels", 1.0, "action of robot_0: found 1.0, expected 3 finite numbers"),
+    ("wheels", np.zeros(4), "action of robot_0: found array([0., 0., 0., 0.]), expected 3"),
+    ("wheels", np.array([None, 1, 2], dtype=object), "action of robot_0: found array([None, 1, 2]"),
+    ("wheels", np.array(["1", "0", "0.5"]), "action of robot_0: found array(['1', '0', '0.5']"),
+    ("command", {"command": 1, "target": np.array([np.nan, 40.0])}, "action of robot_0: found {'command': 1"),
+    ("command", {"command": 1, "target": np.array([1e6, 1e6])}, "on the map, x 0..120, y 0..80"),
+    ("command", {"command": 1.7, "target": np.array([60.0, 40.0])}, "a whole number 0..5"),
+    ("command", {"command": 1}, 'expected {"command": a whole number 0..5'),
+    ("command", {"command": "goto", "target": np.array([60.0, 40.0])}, "found {'command': 'goto'"),
+    ("command", {"command": 9, "target": np.array([60.0, 40.0])}, "a whole number 0..5"),
+]
+
+
+@pytest.mark.parametrize(("action_mode", "given", "says"), BAD_ACTIONS)
+def test_a_bad_action_is_refused_and_no_action_of_the_step_applied(
+    missions: dict[str, Path], action_mode: str, given: Any, says: str
+) -> None:
+    """Each was numpy's error from deep inside, or silently wrong (NaN state for good, a NaN goal in
+    every later observation, a target off the map driven to); and the robots before the bad one
+    had their commands already set."""
+    env = _warm(swarm.sim.parallel_env(mission=missions["quiet"], action_mode=action_mode))
+    actions = _actions(np.random.default_rng(1), env)
+    actions = {a: v for a, v in actions.items() if a != "robot_0"} | {"robot_0": given}  # last
+    state, command, target = env.robot_state.copy(), env.command.copy(), env.target_m.copy()
+    with pytest.raises(SwarmError) as err:
+        env.step(actions)
+    assert says in str(err.value) and "\n" not in str(err.value)
+    np.testing.assert_array_equal(env.robot_state, state)
+    np.testing.assert_array_equal(env.command, command)
+    np.testing.assert_array_equal(env.target_m, target)
+
+
+def test_bad_calls_to_the_parallel_env_say_what_was_expected(missions: dict[str, Path]) -> None:
+    mission = missions["quiet"]
+    env = swarm.sim.parallel_env(mission=mission)
+    with pytest.raises(SwarmError, match=r"step\(\) before reset\(\)"):
+        env.step({a: np.zeros(3) for a in env.possible_agents})
+    last = f"robot_{env.n - 1}"
+    for agent in ("robot_99", None, 0):
+        with pytest.raises(SwarmError, match=rf"agent {agent!r}, expected one of robot_0 \.\. {last}"):
+            env.action_space(agent)
+        with pytest.raises(SwarmError, match="expected one of robot_0"):
+            env.observation_space(agent)
+    assert env.action_space(last) is env.action_space("robot_0")  # one object, as PettingZoo wants
+    for seed in (-1, 2.5, "7", True):
+        with pytest.raises(SwarmError, match=rf"seed {seed!r}, expected None or a whole number >= 0"):
+            env.reset(seed=seed)
+    env.reset(seed=np.int64(3))
+    with pytest.raises(
+        SwarmError, match=rf"an action for 'robot_99', expected agent ids robot_0 \.\. {last}"
+    ):
+        env.step({"robot_99": np.zeros(3)})
+    with pytest.raises(SwarmError, match="actions of type list, expected a dict of agent id to action"):
+        env.step([np.zeros(3)] * 4)
+    for max_cycles in (0, -1, 2.5, "3"):
+        with pytest.raises(
+            SwarmError, match=rf"max_cycles {max_cycles!r}, expected None or a whole number >= 1"
+        ):
+            swarm.sim.parallel_env(mission=mission, max_cycles=max_cycles)
+    with pytest.raises(SwarmError, match=r"overrides \['swarm.count=5'\], expected a dict of dotted keys"):
+        swarm.sim.parallel_env(mission=mission, overrides=["swarm.count=5"])
+    with pytest.raises(SwarmError, match=r"config \{'dt_s': 0.5\}, expected a SimConfig"):
+        swarm.sim.parallel_env(mission=mission, config={"dt_s": 0.5})
+    with pytest.raises(SwarmError, match="mission None, expected a mission file's path or a Mission"):
+        swarm.sim.parallel_env(mission=None)

@@ -42,7 +42,9 @@ def runs(tmp_path_factory):
     mission = base / "tiny.yaml"
     mission.write_text(TINY)
     common = ["simulate", str(mission), "--seed", "1", "--workers", "1", "--set", "swarm.count=5"]
-    first = _run([*common, "--out", str(base / "a")])
+    with pytest.MonkeyPatch.context() as mp:  # the bars at once: this run takes under their delay
+        mp.setattr("swarm.cli.BAR_DELAY_S", 0.0)
+        first = _run([*common, "--out", str(base / "a")])
     second = _run([*common, "--out", str(base / "b"), "--animate", str(base / "run.gif")])
     return base, first, second
 

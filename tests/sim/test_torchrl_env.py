@@ -59,3 +59,22 @@ def test_a_rollout_is_the_vector_env_step_for_step() -> None:
             got = roll["next", "robot", "observation"][:, t].numpy()
             np.testing.assert_array_equal(got[ended], infos["final_obs"][ended])
     assert roll["next", "done"].sum() == 2 * RUNS  # every run ended twice: at steps 8 and 16
+
+
+def test_a_reset_of_runs_still_going_is_refused_not_made_of_every_run() -> None:
+    """Asking to reset run 0 alone, mid-episode, once reset both runs, throwing run 1's away."""
+    from tensordict import TensorDict
+
+    from swarm.errors import SwarmError
+
+    env = SwarmTorchEnv(mission=MISSION, num_envs=2, seed=0)
+    td = env.reset()
+    for _ in range(5):
+        td.set(("robot", "action"), torch.full((2, env.n, 3), 0.5))
+        td = env.step(td)["next"]
+    steps = [r.steps for r in env.vec.world.runs]
+    with pytest.raises(
+        SwarmError, match=r"resets the runs whose episodes ended, or all of them; asked for runs \[0\] of 2"
+    ):
+        env.reset(TensorDict({"_reset": torch.tensor([[True], [False]])}, batch_size=[2]))
+    assert [r.steps for r in env.vec.world.runs] == steps

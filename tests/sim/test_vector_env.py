@@ -218,8 +218,13 @@ def test_a_subclass_resets_its_own_state_on_autoreset(missions: dict[str, Path])
 
 
 def test_bad_calls_say_what_was_expected(missions: dict[str, Path]) -> None:
-    with pytest.raises(SwarmError, match="num_envs 0, expected at least 1"):
-        swarm.sim.vector_env(mission=missions["hazardous"], num_envs=0)
+    for num_envs in (0, 2.5, "3", True):  # "3" and 2.5 were a bare TypeError, True a numpy one
+        with pytest.raises(SwarmError, match=rf"num_envs {num_envs!r}, expected a whole number >= 1"):
+            swarm.sim.vector_env(mission=missions["hazardous"], num_envs=num_envs)
+    with pytest.raises(SwarmError, match="normalize_obs 'False', expected True or False"):
+        swarm.sim.vector_env(mission=missions["hazardous"], num_envs=2, normalize_obs="False")
+    with pytest.raises(SwarmError, match=r"seed -1, expected None or a whole number >= 0"):
+        swarm.sim.vector_env(mission=missions["hazardous"], num_envs=2, seed=-1)
     vec = swarm.sim.vector_env(mission=missions["hazardous"], num_envs=2)
     with pytest.raises(SwarmError, match=r"step\(\) before reset\(\)"):
         vec.step(np.zeros((2, ROBOTS, 3)))
@@ -229,3 +234,25 @@ def test_bad_calls_say_what_was_expected(missions: dict[str, Path]) -> None:
         vec.step(np.zeros((2, ROBOTS, 2)))
     with pytest.raises(SwarmError, match="normalize_obs=True"):
         vec.normalize(np.zeros(vec.obs_dim))
+    with pytest.raises(SwarmError, match=r"seed 2.5, expected None or a whole number >= 0"):
+        vec.reset(seed=2.5)  # was the seed 2
+
+
+def test_a_nan_action_of_a_robot_in_the_mission_is_refused_and_changes_nothing(missions) -> None:
+    """A NaN wheel speed once made a robot's state NaN for good; a masked robot's row is ignored."""
+    vec = swarm.sim.vector_env(mission=missions["hazardous"], num_envs=2, seed=3)
+    vec.reset()
+    for _ in range(30):
+        mask = vec.step(np.full((2, ROBOTS, 3), 0.5))[4]["agent_mask"]
+    before = vec.world.robot_state.copy()
+    bad = np.full((2, ROBOTS, 3), 0.5)
+    live = np.argwhere(mask)[0]
+    bad[tuple(live)] = [np.nan, 0.0, 0.0]
+    with pytest.raises(SwarmError, match=rf"actions\[{live[0]}, {live[1]}\]: found \[nan, 0.0, 0.0\]"):
+        vec.step(bad)
+    np.testing.assert_array_equal(vec.world.robot_state, before)
+    vec.world.in_agents[0, 0] = False  # a robot out of the mission: its row is not read
+    ignored = np.full((2, ROBOTS, 3), 0.5)
+    ignored[0, 0] = np.nan
+    vec.step(ignored)
+    assert np.isfinite(vec.world.robot_state).all()
