@@ -3,6 +3,7 @@ output folder left behind."""
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import pytest
@@ -102,3 +103,23 @@ def test_a_refused_resume_is_one_line_without_a_progress_bar(tmp_path, capfd) ->
     err = capfd.readouterr().err
     assert len(err.splitlines()) == 1 and err.startswith("swarm: error: "), err
     assert "a different study" in err
+
+
+def test_a_ray_address_without_a_cluster_is_one_line_and_writes_nothing(tmp_path, monkeypatch, capfd) -> None:
+    """It was Ray's ConnectionError traceback, exit 1, after study.json was written."""
+    ray = pytest.importorskip("ray")  # the `ray` extra; CI installs it
+
+    def refused(*args, **kwargs):
+        os.write(2, b"gcs_client.cc:210: Failed to get cluster ID\n")  # Ray's core logs its retries so
+        raise ConnectionError("Failed to connect to Ray cluster at 10.255.255.1:6379")
+
+    monkeypatch.setattr(ray, "init", refused)
+    out = tmp_path / "study"
+    argv = ["study", str(REPO / "missions" / "landing.yaml"), "--runs", "2", "--backend", "ray"]
+    assert main([*argv, "--address", "10.255.255.1:6379", "--out", str(out)]) == 2
+    assert capfd.readouterr().err == (
+        "swarm: error: command line: --address: found '10.255.255.1:6379', expected a running Ray"
+        " cluster ('auto' on one of its nodes, or ray://HOST:10001): Failed to connect to Ray cluster"
+        " at 10.255.255.1:6379\n"
+    )
+    assert not out.exists()

@@ -12,9 +12,11 @@ stepped together on the batched world core cost little more than one, and give t
 
 from __future__ import annotations
 
+import contextlib
 import math
 import multiprocessing
 import os
+import sys
 from collections.abc import Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 
@@ -82,26 +84,71 @@ def run_local(tasks: Sequence[RunTask], workers: int, batch: int | dict[int, int
             raise
 
 
-def run_ray(
-    tasks: Sequence[RunTask], workers: int | None, address: str | None, batch: int | dict[int, int] = 1
-) -> Iterator[dict]:
-    """Rows as runs finish on a Ray cluster (`address`, e.g. "auto" or "ray://host:10001"), or on a
-    local Ray instance started here (`workers` CPUs) when no address is given; in batches as
-    `run_local`."""
+def start_ray(workers: int | None, address: str | None) -> bool:
+    """Connect to the Ray cluster at `address` (e.g. "auto" or "ray://host:10001"), or start a
+    local Ray instance (`workers` CPUs) when no address is given, unless Ray is already running
+    here; True if this call started it (the caller shuts it down). Before a study writes anything:
+    an address with no cluster is one line, not a traceback after study.json."""
     try:
         import ray
     except ImportError:
         raise InputError(
             "command line", "--backend", "ray", "the ray extra installed: pip install 'surf-swarm[ray]'"
         ) from None
-    started = False
-    if not ray.is_initialized():
-        kwargs: dict = {"include_dashboard": False, "log_to_driver": False, "configure_logging": False}
+    if ray.is_initialized():
+        return False
+    kwargs: dict = {"include_dashboard": False, "log_to_driver": False, "configure_logging": False}
+    try:
         if address is not None:
-            ray.init(address=address, **kwargs)
+            with _native_stderr_muted():
+                ray.init(address=address, **kwargs)
         else:
             ray.init(num_cpus=workers or default_workers(), **kwargs)
-        started = True
+    except (ConnectionError, ValueError, RuntimeError) as exc:
+        reason = (str(exc).strip().splitlines() or [type(exc).__name__])[0]
+        raise InputError(
+            "command line",
+            "--address",
+            address,
+            f"a running Ray cluster ('auto' on one of its nodes, or ray://HOST:10001): {reason}",
+        ) from None
+    return True
+
+
+@contextlib.contextmanager
+def _native_stderr_muted() -> Iterator[None]:
+    """File descriptor 2 to /dev/null meanwhile: Ray's core logs each retry of a connection to a
+    cluster that is not there straight to it, ahead of the one line that says so."""
+    sys.stderr.flush()
+    saved = os.dup(2)
+    try:
+        with open(os.devnull, "w") as null:
+            os.dup2(null.fileno(), 2)
+            yield
+    finally:
+        os.dup2(saved, 2)
+        os.close(saved)
+
+
+def stop_ray() -> None:
+    import ray
+
+    ray.shutdown()
+
+
+def run_ray(
+    tasks: Sequence[RunTask],
+    workers: int | None,
+    address: str | None,
+    batch: int | dict[int, int] = 1,
+    started: bool | None = None,
+) -> Iterator[dict]:
+    """Rows as runs finish on Ray (`start_ray`; `started`: whether the caller has already started
+    it here, None: start it now), in batches as `run_local`; Ray is shut down at the end if it was
+    started for these runs."""
+    import ray
+
+    started = start_ray(workers, address) if started is None else started
     try:
         # a worker that dies (kill -9, out of memory, a lost node) has its run retried elsewhere:
         # the run's seed is in its task, so the retry gives the same row
@@ -119,4 +166,4 @@ def run_ray(
         raise SwarmError(f"study: the Ray backend failed: {exc}") from None
     finally:
         if started:
-            ray.shutdown()
+            stop_ray()

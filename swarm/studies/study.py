@@ -125,8 +125,15 @@ def _run_locked(
     progress: Progress | None,
     batch: int | None = None,
 ) -> tuple[pa.Table, dict]:
+    # Ray first: an address with no cluster behind it is refused before anything is written
+    started = backends.start_ray(workers, address) if backend == "ray" else False
     store = ResultStore(out, spec.table_schema())
-    store.open(spec.as_dict())
+    try:
+        store.open(spec.as_dict())
+    except BaseException:
+        if started:
+            backends.stop_ray()
+        raise
     done = store.done()
     tasks = [t for t in spec.tasks() if (t.point, t.run) not in done]
     total = len(spec.points()) * spec.runs
@@ -137,7 +144,7 @@ def _run_locked(
     if backend == "local":
         rows = backends.run_local(tasks, n_workers, sizes)
     else:
-        rows = backends.run_ray(tasks, workers, address, sizes)
+        rows = backends.run_ray(tasks, workers, address, sizes, started=started)
     buffer: list[dict] = []
     finished = total - len(tasks)
     chunk = max(1, min(CHUNK_RUNS, len(tasks) // (4 * n_workers) or 1))
