@@ -4,6 +4,7 @@ output folder left behind."""
 from __future__ import annotations
 
 import os
+import socket
 from pathlib import Path
 
 import pytest
@@ -114,6 +115,7 @@ def test_a_ray_address_without_a_cluster_is_one_line_and_writes_nothing(tmp_path
         raise ConnectionError("Failed to connect to Ray cluster at 10.255.255.1:6379")
 
     monkeypatch.setattr(ray, "init", refused)
+    monkeypatch.setattr("swarm.studies.backends._unreachable", lambda address: None)  # a port answers
     out = tmp_path / "study"
     argv = ["study", str(REPO / "missions" / "landing.yaml"), "--runs", "2", "--backend", "ray"]
     assert main([*argv, "--address", "10.255.255.1:6379", "--out", str(out)]) == 2
@@ -122,4 +124,21 @@ def test_a_ray_address_without_a_cluster_is_one_line_and_writes_nothing(tmp_path
         " cluster ('auto' on one of its nodes, or ray://HOST:10001): Failed to connect to Ray cluster"
         " at 10.255.255.1:6379\n"
     )
+    assert not out.exists()
+
+
+def test_a_ray_address_where_nothing_answers_is_refused_at_once(tmp_path, capfd) -> None:
+    """Ray waited for ever on a closed port of this machine; the port is tried first."""
+    pytest.importorskip("ray")
+    with socket.socket() as sock:  # a port nothing listens on: bound, then let go
+        sock.bind(("127.0.0.1", 0))
+        port = sock.getsockname()[1]
+    out = tmp_path / "study"
+    argv = ["study", str(REPO / "missions" / "landing.yaml"), "--runs", "2", "--backend", "ray"]
+    assert main([*argv, "--address", f"127.0.0.1:{port}", "--out", str(out)]) == 2
+    err = capfd.readouterr().err
+    assert err.startswith(
+        f"swarm: error: command line: --address: found '127.0.0.1:{port}', expected a running"
+    )
+    assert err.endswith(f"nothing answers at 127.0.0.1:{port} (Connection refused)\n")
     assert not out.exists()

@@ -16,6 +16,7 @@ import contextlib
 import math
 import multiprocessing
 import os
+import socket
 import sys
 from collections.abc import Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
@@ -97,6 +98,10 @@ def start_ray(workers: int | None, address: str | None) -> bool:
         ) from None
     if ray.is_initialized():
         return False
+    expected = "a running Ray cluster ('auto' on one of its nodes, or ray://HOST:10001)"
+    unreachable = None if address is None else _unreachable(address)
+    if unreachable is not None:  # Ray itself waits 20 s for a silent host, and for ever for some
+        raise InputError("command line", "--address", address, f"{expected}: {unreachable}")
     kwargs: dict = {"include_dashboard": False, "log_to_driver": False, "configure_logging": False}
     try:
         if address is not None:
@@ -106,13 +111,25 @@ def start_ray(workers: int | None, address: str | None) -> bool:
             ray.init(num_cpus=workers or default_workers(), **kwargs)
     except (ConnectionError, ValueError, RuntimeError) as exc:
         reason = (str(exc).strip().splitlines() or [type(exc).__name__])[0]
-        raise InputError(
-            "command line",
-            "--address",
-            address,
-            f"a running Ray cluster ('auto' on one of its nodes, or ray://HOST:10001): {reason}",
-        ) from None
+        raise InputError("command line", "--address", address, f"{expected}: {reason}") from None
     return True
+
+
+#: How long `start_ray` waits for a cluster's port to answer before giving up on the address (s).
+RAY_CONNECT_TIMEOUT_S = 5.0
+
+
+def _unreachable(address: str) -> str | None:
+    """Why nothing answers at `address` (HOST:PORT or ray://HOST:PORT), None if something does or
+    the address names no port (e.g. "auto": Ray finds the cluster itself)."""
+    host, sep, port = address.removeprefix("ray://").rpartition(":")
+    if not sep or not port.isdigit():
+        return None
+    try:
+        with socket.create_connection((host.strip("[]"), int(port)), timeout=RAY_CONNECT_TIMEOUT_S):
+            return None
+    except OSError as exc:
+        return f"nothing answers at {host}:{port} ({exc.strerror or type(exc).__name__})"
 
 
 @contextlib.contextmanager
