@@ -320,6 +320,13 @@ def _load_grid(path: Path) -> tuple[np.ndarray, np.ndarray]:
         raise InputError(
             path, "elevation_m", f"shape {elevation.shape}", f"the shape of 'terrain', {terrain.shape}"
         )
+    _check_elevation(path, elevation)
+    return terrain, elevation
+
+
+def _check_elevation(path: str | Path, elevation: np.ndarray) -> None:
+    """Finite elevations on Earth (`MAX_ELEVATION_M`), the first bad cell named: read and written
+    alike, so no map is written that could not be read back."""
     bad = ~np.isfinite(elevation)
     if bad.any():
         row, col = (int(i) for i in np.argwhere(bad)[0])
@@ -335,7 +342,6 @@ def _load_grid(path: Path) -> tuple[np.ndarray, np.ndarray]:
             float(elevation[row, col]),
             f"an elevation on Earth, within +-{MAX_ELEVATION_M:g} m",
         )
-    return terrain, elevation
 
 
 def load_map(path: str | Path, library: TerrainLibrary | None = None) -> BeachMap:
@@ -458,10 +464,10 @@ def _check_map_for_saving(beach_map: BeachMap, path: Path) -> tuple[np.ndarray, 
     if not np.issubdtype(terrain.dtype, np.integer):
         raise InputError(path, "terrain", f"dtype {terrain.dtype}", "integer class indices")
     elevation = np.asarray(beach_map.elevation_m, dtype=np.float32)
-    if not np.isfinite(elevation).all():
-        raise InputError(path, "elevation_m", "non-finite values", "finite elevations (m)")
     if 0 in terrain.shape:
         raise InputError(path, "terrain", f"shape {terrain.shape}", "a non-empty 2-D grid")
+    if elevation.ndim == 2:
+        _check_elevation(path, elevation)
     for rname, region in beach_map.regions.items():
         where = f"regions.{rname}"
         if rname != region.name:

@@ -646,6 +646,12 @@ def test_save_checks_everything_before_writing(tmp_path):
     nan_z[0, 0] = np.nan
     with pytest.raises(InputError, match="elevation_m"):
         save_map(BeachMap("b", CELL, ORIGIN, CLASSES, bad.terrain, nan_z), tmp_path / "m.yaml")
+    sky_z = bad.elevation_m.copy()
+    sky_z[2, 3] = 3e38  # a map that could not be read back is not written either
+    with pytest.raises(
+        InputError, match=r"elevation_m\[2, 3\]: found 3\.\d+e\+38, expected an elevation on Earth"
+    ):
+        save_map(BeachMap("b", CELL, ORIGIN, CLASSES, bad.terrain, sky_z), tmp_path / "m.yaml")
     assert list(tmp_path.iterdir()) == []
 
 
