@@ -66,6 +66,7 @@ Determinism: passes are kept sorted by key robot * m + mine, and every draw is t
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -112,27 +113,27 @@ class Detection:
 
 
 def lateral_range_curve(sensor: schema.Sensor) -> Callable[[np.ndarray], np.ndarray]:
-    """The sensor's p(x): detection probability of an object passed at closest distance |x|."""
+    """The sensor's p(x): detection probability of an object passed at closest distance |x|
+    (a partial of a module function, so an environment holding it pickles)."""
     if sensor.lateral_range is not None:
         r = np.asarray(sensor.lateral_range.range_m, dtype=np.float64)
         p = np.asarray(sensor.lateral_range.probability, dtype=np.float64)
-
-        def table(x: np.ndarray) -> np.ndarray:
-            return np.interp(np.abs(np.asarray(x, dtype=np.float64)), r, p, right=0.0)
-
-        return table
-    w = sensor.width_m
+        return functools.partial(_tabulated_p, r=r, p=p)
     if sensor.model == "inverse_cube":
+        return functools.partial(_inverse_cube_p, w=sensor.width_m)
+    return functools.partial(_definite_range_p, w=sensor.width_m)
 
-        def inverse_cube(x: np.ndarray) -> np.ndarray:
-            return inverse_cube_lateral_range(np.abs(np.asarray(x, dtype=np.float64)), w)
 
-        return inverse_cube
+def _tabulated_p(x: np.ndarray, r: np.ndarray, p: np.ndarray) -> np.ndarray:
+    return np.interp(np.abs(np.asarray(x, dtype=np.float64)), r, p, right=0.0)
 
-    def definite_range(x: np.ndarray) -> np.ndarray:
-        return (np.abs(np.asarray(x, dtype=np.float64)) <= w / 2.0).astype(np.float64)
 
-    return definite_range
+def _inverse_cube_p(x: np.ndarray, w: float) -> np.ndarray:
+    return inverse_cube_lateral_range(np.abs(np.asarray(x, dtype=np.float64)), w)
+
+
+def _definite_range_p(x: np.ndarray, w: float) -> np.ndarray:
+    return (np.abs(np.asarray(x, dtype=np.float64)) <= w / 2.0).astype(np.float64)
 
 
 def max_range_m(sensor: schema.Sensor) -> float:

@@ -82,6 +82,16 @@ def test_lateral_range_curves_and_their_ranges() -> None:
     assert max_range_m(TABLE) == 4.0  # p is 0 from 4 m on
 
 
+@pytest.mark.parametrize("sensor", [COOKIE, CUBE, TABLE], ids=["cookie_cutter", "inverse_cube", "table"])
+def test_a_lateral_range_curve_pickles_to_the_same_curve(sensor: Sensor) -> None:
+    """An environment holds its sensor's curve: a closure made pickling mine_clear's env fail."""
+    import pickle
+
+    x = np.linspace(-12.0, 12.0, 97)
+    copy = pickle.loads(pickle.dumps(lateral_range_curve(sensor)))
+    np.testing.assert_array_equal(copy(x), lateral_range_curve(sensor)(x))
+
+
 # straight passes ---------------------------------------------------------------------------------
 
 
