@@ -46,9 +46,11 @@ Actions (`action_mode`):
 Every action of a step is checked before any is applied (`swarm.sim.actions`): a NaN, a wrong
 shape, an unknown agent id or a target off the map is a `SwarmError` naming the agent, and the
 step changes nothing. A robot in `agents` left out of the actions stands still (wheels) or keeps
-its last command; actions for robots that have left are ignored. A copy of an env (pickle, `copy.deepcopy`, as SuperSuit's vector wrappers
-make one) goes on exactly as the original would; `copy.copy` is shallow and shares the original's
-world (stepping either moves both).
+its last command; actions for robots that have left are ignored.
+
+A copy of an env (pickle, `copy.deepcopy`, as SuperSuit's vector wrappers make one) goes on
+exactly as the original would; `copy.copy` is shallow and shares the original's world (stepping
+either moves both).
 
 Observations are fixed-shape float32 Boxes (`swarm.sim.layout`); `state()` is the global state for
 centralized critics. `step_arrays` is `step` on arrays over all robots (rows in `possible_agents`

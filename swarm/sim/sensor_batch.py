@@ -41,6 +41,7 @@ class SensorBatch:
         self.false_alarms = bool(live) and live[0].false_alarms_per_m > 0
         self._dirty = np.ones(self.runs, bool)
         self._keys = np.empty(0, np.int64)
+        self._key_len = np.zeros(self.runs, np.int64)  # each run's screen keys
         self._key_at = np.zeros(self.runs + 1, np.int64)  # where each run's keys start
         self._per_run: list[np.ndarray] = [np.empty(0, np.int64)] * self.runs
         # each run's mines and which are targets, padded to the largest field (NaN, False), and
@@ -89,10 +90,11 @@ class SensorBatch:
                     around = (bins[:, None, :] + _NEIGHBOUR_BINS[None, :, :]).reshape(-1, 2)
                     keys = sorted_unique(self._bin_keys(around, b))
             self._per_run[b] = keys
+            self._key_len[b] = len(keys)
         self._dirty[:] = False
         # the run is the keys' leading part (`_RUN_STRIDE`), so runs in order are sorted keys
         self._keys = np.concatenate(self._per_run)
-        self._key_at = np.concatenate(([0], np.cumsum([len(k) for k in self._per_run]))).astype(np.int64)
+        np.cumsum(self._key_len, out=self._key_at[1:])
 
     def step(
         self,
