@@ -676,6 +676,7 @@ def _cmd_plan(args: argparse.Namespace) -> int:
     from swarm.report.document import today
     from swarm.report.plan_report import summary_rows, write_plan_report
     from swarm.sim.memory import check_fits
+    from swarm.studies.sweep import check_study_size
 
     if args.seed is not None and args.seed < 0:
         raise InputError("command line", "--seed", args.seed, "a seed >= 0")
@@ -683,6 +684,7 @@ def _cmd_plan(args: argparse.Namespace) -> int:
         raise InputError("command line", "--workers", args.workers, "at least 1")
     if args.evaluate < 0:
         raise InputError("command line", "--evaluate", args.evaluate, "a number of runs >= 0")
+    check_study_size("--evaluate", args.evaluate, [])
     if not 0.0 < args.target < 1.0:
         raise InputError("command line", "--target", args.target, "a probability strictly between 0 and 1")
     overrides = _overrides(args.overrides)
@@ -1074,7 +1076,7 @@ def _cmd_study(args: argparse.Namespace) -> int:
     from swarm.report.study_report import answer, study_rows, write_study_report
     from swarm.studies.backends import default_workers
     from swarm.studies.study import StudySpec, run_study
-    from swarm.studies.sweep import Sweep, check_points, parse_sweeps
+    from swarm.studies.sweep import Sweep, check_points, check_study_size, parse_sweeps
 
     if args.runs < 1:
         raise InputError("command line", "--runs", args.runs, "at least 1 run per point")
@@ -1102,6 +1104,7 @@ def _cmd_study(args: argparse.Namespace) -> int:
     if both:
         raise InputError("command line", "--set", both[0], "a key given once: by --set or by --sweep")
     sweeps = sweeps + [Sweep(k, (v,)) for k, v in fixed.items()]  # a --set is a sweep of one value
+    check_study_size("--runs", args.runs, sweeps)
     out = args.out or Path("reports") / f"{args.mission.stem}-study"
     if out.exists() and not out.is_dir():
         raise InputError("command line", "--out", str(out), "a folder (this is a file)")

@@ -142,3 +142,24 @@ def test_a_ray_address_where_nothing_answers_is_refused_at_once(tmp_path, capfd)
     )
     assert err.endswith(f"nothing answers at 127.0.0.1:{port} (Connection refused)\n")
     assert not out.exists()
+
+
+def test_a_study_of_more_than_a_million_runs_is_refused_before_any_work(tmp_path, capsys) -> None:
+    """`--runs 100000000` spent minutes building its list of runs, and memory with it."""
+    landing = str(REPO / "missions" / "landing.yaml")
+    out = tmp_path / "big"
+    cases = (
+        (
+            ["study", landing, "--runs", "2000", "--sweep", "swarm.count=8:600:1"],
+            "--runs: found 2000",
+            "593 points x 2,000",
+        ),
+        (["plan", landing, "--evaluate", "2000000"], "--evaluate: found 2000000", "1 point x 2,000,000"),
+    )
+    for argv, found, each in cases:
+        assert main([*argv, "--out", str(out)]) == 2
+        err = capsys.readouterr().err
+        assert (
+            err == f"swarm: error: command line: {found}, expected at most 1,000,000 runs in all ({each})\n"
+        )
+        assert not out.exists()

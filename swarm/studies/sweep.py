@@ -21,6 +21,17 @@ from swarm.files import parse_yaml
 
 #: A range may not expand to more values than this (a typo like 1:1000000:1 is refused).
 MAX_VALUES = 1000
+#: A study may not hold more runs than this, all points together: a million runs of a few seconds
+#: are months of one core, and `--runs 100000000` spent minutes building its list of runs.
+MAX_STUDY_RUNS = 1_000_000
+
+
+def check_study_size(option: str, runs: int, sweeps: Sequence[Sweep]) -> None:
+    """Refuse more than `MAX_STUDY_RUNS` runs in all (`runs` at each point of `sweeps`' product)."""
+    points = math.prod(len(s.values) for s in sweeps)
+    if runs * points > MAX_STUDY_RUNS:
+        each = f"{points:,} point{'s' if points != 1 else ''} x {runs:,}"
+        raise InputError("command line", option, runs, f"at most {MAX_STUDY_RUNS:,} runs in all ({each})")
 
 
 @dataclass(frozen=True)
