@@ -24,7 +24,7 @@ from functools import lru_cache
 import numpy as np
 
 from swarm.sim.hazards import CAUSES
-from swarm.studies.table import CRITERIA, loss_row
+from swarm.studies.table import CRITERIA, loss_row, param_column
 
 #: Points whose mission and plan a worker keeps.
 PREPARED_CACHE = 16
@@ -101,7 +101,7 @@ def run_batch(tasks: list[RunTask]) -> list[dict]:
 def _row(task: RunTask, mission, plan, log, runtime_s: float) -> dict:
     """One run's row of the results table."""
     row: dict = {"point": task.point, "run": task.run, "seed": task.seed}
-    row.update(dict(task.overrides))
+    row.update({param_column(k): v for k, v in task.overrides})
     row["robots"] = mission.swarm.count
     row["success"] = bool(log.outcome["success"])
     criteria = log.outcome["criteria"]

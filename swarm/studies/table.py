@@ -61,7 +61,7 @@ def loss_row(loss: dict) -> dict:
 def schema(sweep_types: Sequence[tuple[str, pa.DataType]]) -> pa.Schema:
     """The table's schema for a study sweeping these (key, type) pairs."""
     fields = [pa.field("point", pa.int32()), pa.field("run", pa.int32()), pa.field("seed", pa.uint64())]
-    fields += [pa.field(key, kind) for key, kind in sweep_types]
+    fields += [pa.field(param_column(key), kind) for key, kind in sweep_types]
     fields += [pa.field("robots", pa.int32()), pa.field("success", pa.bool_())]
     for c in CRITERIA:
         fields += [pa.field(f"value_{c}", pa.float64()), pa.field(f"met_{c}", pa.bool_())]
@@ -75,3 +75,13 @@ def schema(sweep_types: Sequence[tuple[str, pa.DataType]]) -> pa.Schema:
         pa.field("runtime_s", pa.float64()),
     ]
     return pa.schema(fields)
+
+
+#: The table's own columns, whatever the study sweeps.
+OWN_COLUMNS = frozenset(schema([]).names)
+
+
+def param_column(key: str) -> str:
+    """The column of a swept (or held) mission key: the key itself, or "mission.KEY" for a key
+    named like one of the table's own columns (the mission's `seed` against each run's)."""
+    return f"mission.{key}" if key in OWN_COLUMNS else key

@@ -499,3 +499,24 @@ def test_a_held_key_is_no_sweep_and_the_answer_says_what_was_held(tiny, tmp_path
         f"over 3 runs (95% Wilson interval {point['wilson_low']:.3f} to {point['wilson_high']:.3f})"
     )
     assert "swept" not in first
+
+
+def test_the_mission_seed_held_by_a_study_has_its_own_column(tiny, tmp_path) -> None:
+    """`--set seed=5` (and `plan --seed 1 --evaluate N`, which holds it) once wrote the mission's
+    seed over each run's in the column 'seed', and the table's two 'seed' fields failed to read."""
+    spec = StudySpec(str(tiny), runs=3, sweeps=parse_sweeps(["seed=5"]), seed=7)
+    table, summary = run_study(spec, tmp_path / "s", workers=1)
+    assert table.column("mission.seed").to_pylist() == [5, 5, 5]
+    assert table.column("seed").to_pylist() == [run_seed(7, 0, r) for r in range(3)]
+    assert summary["points"][0]["params"] == {"seed": 5}
+
+
+def test_plan_with_a_seed_and_an_evaluation(tiny, tmp_path, capsys) -> None:
+    """README's `swarm plan M --seed N --evaluate R` exited 2 after every run of the evaluation."""
+    out = tmp_path / "p"
+    assert (
+        main(["plan", str(tiny), "--seed", "1", "--evaluate", "2", "--workers", "1", "--out", str(out)]) == 0
+    )
+    evaluation = json.loads((out / "evaluation.json").read_text())
+    assert evaluation["runs"] == 2
+    assert "in simulation" in capsys.readouterr().out
