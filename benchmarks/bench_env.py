@@ -478,6 +478,14 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--repeat", type=int, default=3, help="--adapter-only: alternations")
     ap.add_argument("--jaxmarl-python", help="a Python with jaxmarl: JaxMARL's MPE beside the vector env")
     args = ap.parse_args(argv)
+    if not (args.vector_only or args.adapter_only):  # before any measurement
+        try:
+            import mpe2  # noqa: F401 (the peer; the `bench` extra)
+        except ImportError:
+            raise SystemExit(
+                "bench_env: the MPE peer needs the bench extra (pip install '.[bench]'); "
+                "--vector-only runs without it"
+            ) from None
     batches = [tuple(int(v) for v in spec.lower().split("x")) for spec in args.batches]
 
     print(

@@ -1,7 +1,7 @@
 """`World`: B independent runs of one mission, advanced together on (B, n, ...) arrays.
 
 ```python
-world = World(MissionSetup(mission, plan, dt_s=0.5, substep_s=0.25), runs=8, config=SimConfig())
+world = World(MissionSetup(mission, plan, dt_s=0.5, substep_s=0.25), runs=8, comms_period_s=5.0)
 world.reset(seeds=[1, 2, 3, 4, 5, 6, 7, 8])
 while world.in_agents.any():
     wheels, jet = world.controller_commands()      # or from actions, (B, n, 2) and (B, n)
