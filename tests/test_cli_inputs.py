@@ -163,3 +163,17 @@ def test_a_study_of_more_than_a_million_runs_is_refused_before_any_work(tmp_path
             err == f"swarm: error: command line: {found}, expected at most 1,000,000 runs in all ({each})\n"
         )
         assert not out.exists()
+
+
+def test_output_into_a_closed_pipe_is_no_traceback() -> None:
+    """`swarm schema | head -1` printed a BrokenPipeError traceback."""
+    import subprocess
+    import sys
+
+    reader = subprocess.Popen(["head", "-c", "1"], stdin=subprocess.PIPE, stdout=subprocess.DEVNULL)
+    writer = subprocess.run(
+        [sys.executable, "-m", "swarm.cli", "schema"], stdout=reader.stdin, stderr=subprocess.PIPE, text=True
+    )
+    reader.stdin.close()
+    reader.wait()
+    assert "Traceback" not in writer.stderr and "BrokenPipeError" not in writer.stderr, writer.stderr

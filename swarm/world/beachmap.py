@@ -2,7 +2,7 @@
 
 Grid convention (the map file format's): row 0 is the southern edge at `origin_m[1]`, column 0
 the western edge at `origin_m[0]`; cell (row, col) covers x in [x0 + col * cell, x0 + (col+1) *
-cell) and y likewise. World x is east, y north (ARCHITECTURE.md). Every terrain class names a
+cell) and y likewise. World x is east, y north (README: Beach maps). Every terrain class names a
 mode of the terrain library, so the map tells the dynamics which coefficients apply where.
 """
 

@@ -18,7 +18,7 @@ The map file, `maps/NAME.yaml`::
 - `grid` names an `.npz` holding exactly two arrays of one 2-D shape (rows, cols): `terrain`
   (int8, an index into `terrain_classes`) and `elevation_m` (float32, metres above mean sea
   level, finite). Row 0 is the southern edge at `origin_m[1]`, column 0 the western edge at
-  `origin_m[0]`; x is east, y north (ARCHITECTURE.md).
+  `origin_m[0]`; x is east, y north (README: Beach maps).
 - Every terrain class names a mode of the terrain library (`swarm.robot.terrain`).
 - A region is `kind` (one of `REGION_KINDS`) and exactly one of `point: [x, y]`,
   `line: [[x, y], ...]`, `polygon: [[x, y], ...]` (exterior ring; optional `holes:` list of
