@@ -12,7 +12,7 @@ The coefficients are measured (tracemalloc peaks, on this code, `benchmarks/` st
 
 rounded up, plus a fixed amount per robot for its plan, state, route and sensors: 512 kB, from
 `benchmarks/bench_scale.py` (beach_swarm on gentle_fine: peak 313 MB with 1,000 robots, 4.4 GB
-with 10,000, about 445 kB more per robot).
+with 10,000, about 455 kB more per robot).
 """
 
 from __future__ import annotations
