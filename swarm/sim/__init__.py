@@ -35,9 +35,22 @@ def parallel_env(**kwargs: Any) -> SwarmEnv:
     return SwarmEnv(**kwargs)
 
 
+class _CheckedAEC(conversions.parallel_to_aec_wrapper):
+    """PettingZoo's parallel-to-AEC conversion, with each agent's action checked as it is given:
+    the parallel env checks a cycle's actions together, at its last agent, which named a bad
+    action agents late."""
+
+    def step(self, action: Any) -> None:
+        agent = self.agent_selection
+        if action is not None and not (self.terminations[agent] or self.truncations[agent]):
+            self.env.check_action(agent, action)
+        super().step(action)
+
+
 def env(**kwargs: Any) -> pettingzoo.AECEnv:
-    """The AEC form, through PettingZoo's own parallel-to-AEC conversion and order enforcement."""
-    return wrappers.OrderEnforcingWrapper(conversions.parallel_to_aec(SwarmEnv(**kwargs)))
+    """The AEC form, through PettingZoo's own parallel-to-AEC conversion (each action checked as
+    its agent gives it) and order enforcement."""
+    return wrappers.OrderEnforcingWrapper(_CheckedAEC(SwarmEnv(**kwargs)))
 
 
 def vector_env(**kwargs: Any) -> SwarmVectorEnv:

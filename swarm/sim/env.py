@@ -510,6 +510,14 @@ class SwarmEnv(ParallelEnv):
         jet[idx] = act[:, 2] * limits.jet_thrust_max_n
         return wheels, jet
 
+    def check_action(self, agent: str, action: Any) -> None:
+        """`agent`'s action as a step checks it (`swarm.sim.actions`): a `SwarmError` if it is bad.
+        The AEC form checks each action as its agent gives it."""
+        if self.action_mode == "wheels":
+            wheel_rows({agent: action}, self.agent_index)
+        else:
+            self._command_check.from_dict({agent: action}, self.agent_index)
+
     def set_command(self, i: int, command: int, target: np.ndarray | None = None) -> None:
         """Give robot i a high-level command (`COMMANDS`); used by command mode and the policy."""
         self.run.set_command(i, command, target)

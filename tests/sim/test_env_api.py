@@ -526,3 +526,16 @@ def test_bad_calls_to_the_parallel_env_say_what_was_expected(missions: dict[str,
         swarm.sim.parallel_env(mission=mission, config={"dt_s": 0.5})
     with pytest.raises(SwarmError, match="mission None, expected a mission file's path or a Mission"):
         swarm.sim.parallel_env(mission=None)
+
+
+def test_the_aec_form_refuses_a_bad_action_from_the_agent_that_gives_it(missions: dict[str, Path]) -> None:
+    """The parallel env checks a cycle's actions at its last agent: a bad first action was named
+    only when the last agent acted."""
+    aec = swarm.sim.env(mission=missions["quiet"])
+    aec.reset(seed=0)
+    first = aec.agent_selection
+    with pytest.raises(SwarmError, match=rf"action of {first}: found array\(\[nan"):
+        aec.step(np.array([np.nan, 0.0, 0.0], np.float32))
+    assert aec.agent_selection == first  # its turn still: it may act again
+    aec.step(np.zeros(3, np.float32))
+    assert aec.agent_selection != first
