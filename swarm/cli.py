@@ -7,6 +7,7 @@ import contextlib
 import json
 import os
 import sys
+import tempfile
 from collections.abc import Sequence
 from pathlib import Path
 from typing import NoReturn
@@ -176,6 +177,14 @@ def _check_output(path: Path | None, option: str, suffixes: tuple[str, ...]) -> 
         raise InputError(
             "command line", option, str(path), f"a file in an existing folder ({parent} is not one)"
         )
+    try:  # a trial file, not os.access: root passes os.access on /proc, and a calibration's fit
+        # would run its minute before the write failed
+        with tempfile.TemporaryFile(dir=parent):
+            pass
+    except OSError as exc:
+        raise InputError(
+            "command line", option, str(path), f"a file in a folder this user may write ({exc.strerror})"
+        ) from None
 
 
 FIGURE_SUFFIXES = (".png", ".svg", ".pdf")

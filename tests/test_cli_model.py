@@ -353,3 +353,25 @@ def test_module_version_and_help():
     assert result.returncode == 0
     for option in ("--robot", "--encoders", "--truth", "--ssv", "--model", "--compare", "--json", "--plot"):
         assert option in result.stdout
+
+
+def test_calibrate_into_a_folder_it_cannot_write_is_refused_before_the_fit(tmp_path):
+    """The write was tried after the fit (a minute of it); a trial file is made first now."""
+    locked = tmp_path / "locked"
+    locked.mkdir()
+    locked.chmod(0o500)
+    try:
+        try:
+            (locked / "probe").touch()  # root may: then /proc, where nobody makes a file
+            (locked / "probe").unlink()
+            target = Path("/proc/fit.yaml")
+        except PermissionError:
+            target = locked / "fit.yaml"
+        result = swarm("model", "calibrate", *run_args("concrete_square"), "--out", target)
+    finally:
+        locked.chmod(0o700)
+    assert result.returncode == 2
+    assert result.stderr.startswith(
+        f"swarm: error: command line: --out: found '{target}', expected a file in a"
+    )
+    assert "fitting" not in result.stderr  # it never started

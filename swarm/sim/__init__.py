@@ -6,6 +6,7 @@ all); `SwarmEnv` is its PettingZoo adapter for one run, `vector_env` its batched
 `swarm.sim.run.simulate_batch` the scripted policy over a batch.
 
 ```python
+import pettingzoo
 import swarm.sim
 env = swarm.sim.parallel_env(mission="missions/mine_clear.yaml", overrides={"swarm.count": 40})
 aec = swarm.sim.env(mission="missions/landing.yaml")        # the AEC form, by PettingZoo's conversion
