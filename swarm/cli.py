@@ -230,33 +230,15 @@ def _path(text: str) -> Path:
     return Path(text)
 
 
-#: The files that mark each command's output folder (`swarm.report.load`'s kinds); a simulation's
-#: folder holds a plan.json too, so its own files are looked for first.
-OUTPUT_MARKS = {
-    "simulation": ("outcome.json", "events.jsonl", "trajectories.npz"),
-    "study": ("study.json", "summary.json", "results.parquet"),
-    "plan": ("plan.json",),
-    "validation": ("validation.json",),
-}
-
-
-def _output_kind(folder: Path) -> str | None:
-    """Which command's output `folder` holds, None for none (or no folder)."""
-    if folder.is_dir():
-        for kind, marks in OUTPUT_MARKS.items():
-            if any((folder / name).is_file() for name in marks):
-                return kind
-    return None
-
-
 def _output_folder(folder: Path, args: argparse.Namespace, kind: str | None = None):
     """The lock on an output folder while this command writes it (`swarm.files.folder_lock`): a
     second swarm process writing the same folder stops with one line naming the holder. With
     `kind` (the command's own), a folder holding another command's output is refused: a study
     written into a plan's folder would overwrite its report and leave neither readable."""
     from swarm.files import folder_lock
+    from swarm.report.load import output_kind
 
-    held = _output_kind(folder) if kind is not None else None
+    held = output_kind(folder) if kind is not None else None
     if held not in (None, kind):
         expected = f"a new folder or a {kind} folder (this one holds a {held}'s output)"
         raise InputError("command line", "--out", str(folder), expected)

@@ -40,7 +40,7 @@ from swarm.report.study_report import study_report
 from swarm.report.validation_report import VALIDATION_FILE, read_validation, validation_report
 from swarm.sim.run import LOG_FILES, read_log
 from swarm.studies.evaluate import EVALUATION_FILE
-from swarm.studies.store import RESULTS
+from swarm.studies.store import RESULTS, SPEC
 from swarm.studies.table import schema as results_schema
 
 KINDS = ("plan", "simulation", "study", "validation")
@@ -60,10 +60,28 @@ KNOWN_FILES = {
     VALIDATION_FILE,
     *LOG_FILES,
     *STUDY_FILES,
-    "study.json",
+    SPEC,
     "validation.npz",
     "plan.geojson",
 }
+#: The files that mark each kind's folder, however far its command got; a simulation's folder
+#: holds a plan.json too, so its own files are looked for first.
+OUTPUT_MARKS = {
+    "simulation": LOG_FILES,
+    "study": (SPEC, *STUDY_FILES),
+    "plan": (PLAN_FILE,),
+    "validation": (VALIDATION_FILE,),
+}
+
+
+def output_kind(folder: Path) -> str | None:
+    """Which command's output `folder` holds (a kind), None for none or no folder: where a command
+    must not write another's (`swarm ... --out`). `detect` is the strict reading for a report."""
+    if folder.is_dir():
+        for kind, marks in OUTPUT_MARKS.items():
+            if any((folder / name).is_file() for name in marks):
+                return kind
+    return None
 
 
 def detect(path: str | Path) -> tuple[str, Path]:
@@ -353,7 +371,7 @@ def _study_map(folder: Path, summary: dict):
     from swarm.mission.load import load_mission
 
     candidates = [summary.get("mission_path")]
-    spec = folder / "study.json"
+    spec = folder / SPEC
     if spec.is_file():
         from swarm.studies.store import read_study_file
 

@@ -133,6 +133,7 @@ from swarm.sim.world import (
     STATION_KEEP_M,
     TRACK_SAMPLE_S,
     World,
+    is_whole,
 )
 
 ACTION_MODES = ("wheels", "command")
@@ -194,11 +195,6 @@ class SimConfig:
             raise SwarmError("sim: dt_s, substep_s and comms_period_s must be > 0")
         if self.patch_size < 1 or self.neighbours < 0:
             raise SwarmError("sim: patch_size must be >= 1 and neighbours >= 0")
-
-
-def is_whole(value: object) -> bool:
-    """An int (numpy's too), not a bool: a float or a string is refused, not rounded or parsed."""
-    return isinstance(value, int | np.integer) and not isinstance(value, bool)
 
 
 def check_seed(seed: object) -> int | None:

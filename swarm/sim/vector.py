@@ -50,10 +50,10 @@ import numpy as np
 from swarm.errors import SwarmError
 from swarm.mission.plan import MissionPlan
 from swarm.mission.schema import Mission
-from swarm.sim.actions import wheel_array
-from swarm.sim.env import COMMANDS, SimConfig, StepOutcome, SwarmEnv, check_seed, is_whole
+from swarm.sim.actions import Commands, wheel_array
+from swarm.sim.env import COMMANDS, SimConfig, StepOutcome, SwarmEnv, check_seed
 from swarm.sim.observe import Observer
-from swarm.sim.world import World
+from swarm.sim.world import World, is_whole
 
 
 def episode_seed(seed: int, run: int, episode: int) -> int:
@@ -129,6 +129,7 @@ class SwarmVectorEnv:
         if action_mode == "wheels":
             self.single_action_space = first.action_space(first.possible_agents[0])
         else:  # command index (a whole number), target x, y (m): one row of floats
+            self._command_check = Commands(first.beach.bounds_m)
             x0, y0, x1, y1 = first.beach.bounds_m
             self.single_action_space = gymnasium.spaces.Box(
                 np.array([0.0, x0, y0], np.float32),
@@ -186,7 +187,7 @@ class SwarmVectorEnv:
         if self.action_mode == "command":
             if actions.dtype.kind not in "iuf":
                 raise SwarmError(f"sim: actions of dtype {actions.dtype}, expected numbers")
-            check = self.envs[0]._command_check
+            check = self._command_check
             given = [
                 check.from_rows(actions[b], np.flatnonzero(row), f"run {b}, ") for b, row in enumerate(inside)
             ]

@@ -82,6 +82,11 @@ TYPED_STREAMS_MIN_RUNS = 32
 STREAMS = ("mines", "waves", "sensing", "radio", "hazards", "policy", "rocks")
 
 
+def is_whole(value: object) -> bool:
+    """An int (numpy's too), not a bool: a float or a string is refused, not rounded or parsed."""
+    return isinstance(value, int | np.integer) and not isinstance(value, bool)
+
+
 class World:
     """B runs of one mission on (B, n, ...) arrays (module docstring)."""
 
@@ -96,8 +101,7 @@ class World:
     ) -> None:
         if runs < 1:
             raise SwarmError(f"sim: a world needs at least one run, found {runs}")
-        whole = isinstance(max_cycles, int | np.integer) and not isinstance(max_cycles, bool)
-        if max_cycles is not None and (not whole or max_cycles < 1):
+        if max_cycles is not None and (not is_whole(max_cycles) or max_cycles < 1):
             raise SwarmError(f"sim: max_cycles {max_cycles!r}, expected None or a whole number >= 1")
         b, n = int(runs), setup.n
         self.setup = setup

@@ -328,20 +328,20 @@ def _check_elevation(path: str | Path, elevation: np.ndarray) -> None:
     """Finite elevations on Earth (`MAX_ELEVATION_M`), the first bad cell named: read and written
     alike, so no map is written that could not be read back."""
     bad = ~np.isfinite(elevation)
+    count = f"{bad.sum()} non-finite values"
+    _refuse_cells(path, "elevation_m", bad, lambda r, c: count, "finite elevations (m)")
+    far = np.abs(elevation) > MAX_ELEVATION_M
+    on_earth = f"an elevation on Earth, within +-{MAX_ELEVATION_M:g} m"
+    _refuse_cells(path, "elevation_m", far, lambda r, c: float(elevation[r, c]), on_earth)
+
+
+def _refuse_cells(
+    path: str | Path, name: str, bad: np.ndarray, found: Callable[[int, int], object], expected: str
+) -> None:
+    """An `InputError` at the first cell of grid `name` that `bad` marks (row-major), if any."""
     if bad.any():
         row, col = (int(i) for i in np.argwhere(bad)[0])
-        raise InputError(
-            path, f"elevation_m[{row}, {col}]", f"{bad.sum()} non-finite values", "finite elevations (m)"
-        )
-    far = np.abs(elevation) > MAX_ELEVATION_M
-    if far.any():
-        row, col = (int(i) for i in np.argwhere(far)[0])
-        raise InputError(
-            path,
-            f"elevation_m[{row}, {col}]",
-            float(elevation[row, col]),
-            f"an elevation on Earth, within +-{MAX_ELEVATION_M:g} m",
-        )
+        raise InputError(path, f"{name}[{row}, {col}]", found(row, col), expected)
 
 
 def load_map(path: str | Path, library: TerrainLibrary | None = None) -> BeachMap:
@@ -361,14 +361,8 @@ def load_map(path: str | Path, library: TerrainLibrary | None = None) -> BeachMa
     terrain, elevation = _load_grid(grid_path)
     n = len(f.terrain_classes)
     bad = (terrain < 0) | (terrain >= n)
-    if bad.any():
-        row, col = (int(i) for i in np.argwhere(bad)[0])
-        raise InputError(
-            grid_path,
-            f"terrain[{row}, {col}]",
-            int(terrain[row, col]),
-            f"a class index in 0..{n - 1} (terrain_classes of {path.name})",
-        )
+    expected = f"a class index in 0..{n - 1} (terrain_classes of {path.name})"
+    _refuse_cells(grid_path, "terrain", bad, lambda r, c: int(terrain[r, c]), expected)
 
     rows, cols = terrain.shape
     x0, y0 = f.origin_m
