@@ -223,6 +223,16 @@ def _bar(**kwargs):
     return Delayed(file=sys.stderr, delay=BAR_DELAY_S, **kwargs)
 
 
+def _count_runs(bar, done: float, total: int) -> None:
+    """Move a bar of runs to `done` of `total`: never back (a batch's share is taken back when its
+    runs finish, a moment before they are counted), a share of a run to one decimal."""
+    done = round(float(done), 1)
+    bar.total = total
+    if done > bar.n:
+        bar.n = int(done) if done.is_integer() else done
+        bar.refresh()
+
+
 def _path(text: str) -> Path:
     """A path argument; an empty one is refused (Path("") is the current folder)."""
     if not text.strip():
@@ -704,10 +714,8 @@ def _cmd_plan(args: argparse.Namespace) -> int:
 
             with _bar(desc="evaluating", unit="run", leave=False) as bar:
 
-                def run_progress(done: int, total: int) -> None:
-                    bar.total = total
-                    bar.n = done
-                    bar.refresh()
+                def run_progress(done: float, total: int) -> None:
+                    _count_runs(bar, done, total)
 
                 evaluation = evaluate_plan(
                     args.mission,
@@ -1108,13 +1116,10 @@ def _cmd_study(args: argparse.Namespace) -> int:
 
         with _bar(desc="study", unit="run", dynamic_ncols=True) as bar:
 
-            def progress(done: int, total: int) -> None:
-                if bar.total is None:
-                    bar.total = total
-                    bar.initial = bar.n = done
-                    bar.refresh()
-                else:
-                    bar.update(done - bar.n)
+            def progress(done: float, total: int) -> None:
+                if bar.total is None:  # the runs found from before: not in the rate
+                    bar.initial = bar.n = int(done)
+                _count_runs(bar, done, total)
 
             table, summary = run_study(
                 spec,

@@ -177,3 +177,22 @@ def test_output_into_a_closed_pipe_is_no_traceback() -> None:
     reader.stdin.close()
     reader.wait()
     assert "Traceback" not in writer.stderr and "BrokenPipeError" not in writer.stderr, writer.stderr
+
+
+def test_a_bar_of_runs_never_goes_back_and_shows_a_share_to_one_decimal() -> None:
+    """A batch's share is taken back a moment before its rows count (`backends._run_shared`): the
+    bar holds where it was; a share of a run reads 1.3/6, a whole count 2/6."""
+    import io
+
+    from tqdm import tqdm
+
+    from swarm.cli import _count_runs
+
+    bar = tqdm(file=io.StringIO(), unit="run")
+    _count_runs(bar, 1.26, 6)
+    assert (bar.n, bar.total) == (1.3, 6) and "1.3/6" in str(bar)
+    _count_runs(bar, 1.0, 6)
+    assert bar.n == 1.3
+    _count_runs(bar, 2.0, 6)
+    assert bar.n == 2 and isinstance(bar.n, int) and "2/6" in str(bar)
+    bar.close()

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import io
 import json
+import time
 from collections import Counter
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -41,6 +42,8 @@ from swarm.sim.world import World
 
 #: The log's format version, written into outcome.json.
 LOG_VERSION = 1
+#: How often `simulate_batch` tells its `working` callback how far its runs have got (wall s).
+WORKING_EVERY_S = 0.5
 
 
 class _Criterion(BaseModel):
@@ -199,11 +202,15 @@ def simulate_batch(
     record_every_s: float = RECORD_EVERY_S,
     setup: MissionSetup | None = None,
     progress: Callable[[int, int], None] | None = None,
+    working: Callable[[float], None] | None = None,
 ) -> list[MissionLog]:
     """Run the mission once per seed with the scripted policy, all the runs stepped together on the
     batched world core (`swarm.sim.world`): the same logs as `simulate` with each seed, bit for bit.
     `setup` (a `MissionSetup` of this mission and plan, from an earlier batch) saves building it
-    again; `progress(runs_done, runs)` is called as runs finish."""
+    again; `progress(runs_done, runs)` is called as runs finish. `working(runs_worth)` is called
+    about every `WORKING_EVERY_S` of wall time with the work done so far in runs: a finished run
+    counts 1, one still going its share of the time limit. The runs of a batch advance together
+    and finish together, so a bar moved by `progress` alone would sit at 0 until the end."""
     seeds = [int(s) for s in seeds]
     if not seeds:
         return []
@@ -221,7 +228,12 @@ def simulate_batch(
     next_record = [record_every_s] * len(runs)
     completed: list[float | None] = [None] * len(runs)
     live = list(range(len(runs)))
+    said_at = time.monotonic()
     while live:
+        if working is not None and time.monotonic() >= said_at + WORKING_EVERY_S:
+            said_at = time.monotonic()
+            going = np.minimum(world.steps[live] / world.max_steps, 1.0)
+            working(float(len(runs) - len(live) + going.sum()))
         for b in world.off_map(live):  # the only runs `fast_forward` can skip ahead
             if world.fast_forward(b):
                 next_record[b] = max(next_record[b], runs[b].t_s)

@@ -18,7 +18,7 @@ import multiprocessing
 import os
 import socket
 import sys
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 
 from swarm.errors import InputError, SwarmError
@@ -61,28 +61,73 @@ def default_workers() -> int:
         return max(1, os.cpu_count() or 1)
 
 
-def run_local(tasks: Sequence[RunTask], workers: int, batch: int | dict[int, int] = 1) -> Iterator[dict]:
+def run_local(
+    tasks: Sequence[RunTask],
+    workers: int,
+    batch: int | dict[int, int] = 1,
+    working: Callable[[float], None] | None = None,
+) -> Iterator[dict]:
     """Rows as runs finish on `workers` processes (1: in this process, in order), in batches of
-    `batch` runs of a point (or `batch[point]`; 1: one run at a time)."""
+    `batch` runs of a point (or `batch[point]`; 1: one run at a time). `working(runs_worth)` is
+    told now and then how much of the batches still running is done, in runs, beside the rows
+    already yielded (`runner.run_batch`): a batch's runs finish together, at its end."""
     groups = batches(tasks, batch)
     if workers <= 1:
         for group in groups:
-            yield from run_batch(group)
+            yield from run_batch(group, working)
         return
     context = multiprocessing.get_context("forkserver")
+    shared = context.Value("d", 0.0) if working is not None else None
     pending = list(reversed(groups))
-    with ProcessPoolExecutor(max_workers=workers, mp_context=context) as pool:
+    with ProcessPoolExecutor(
+        max_workers=workers, mp_context=context, initializer=_share_work, initargs=(shared,)
+    ) as pool:
         running: set[Future] = set()
         try:
             while pending or running:
                 while pending and len(running) < 2 * workers:  # a short queue: a kill loses little
-                    running.add(pool.submit(run_batch, pending.pop()))
-                finished, running = wait(running, return_when=FIRST_COMPLETED)
+                    running.add(pool.submit(_run_shared, pending.pop()))
+                timeout = None if shared is None else WORKING_POLL_S
+                finished, running = wait(running, timeout=timeout, return_when=FIRST_COMPLETED)
                 for future in finished:
                     yield from future.result()
+                if shared is not None and working is not None:
+                    working(shared.value)
         except BaseException:  # Ctrl-C or a failed run: stop now, do not wait for the queue
             pool.shutdown(wait=False, cancel_futures=True)
             raise
+
+
+#: How often `run_local` reads how far its workers' batches have got (s).
+WORKING_POLL_S = 0.5
+#: A worker process's share of `run_local`'s count of work done in batches still running (runs).
+_WORK_DONE = None
+
+
+def _share_work(shared) -> None:
+    """A worker's start: the count it adds its batches' progress to (None: nobody reads it)."""
+    global _WORK_DONE
+    _WORK_DONE = shared
+
+
+def _run_shared(group: list[RunTask]) -> list[dict]:
+    """`run_batch` in a worker, adding its progress to the shared count and taking it back at the
+    end, when its rows count instead."""
+    shared = _WORK_DONE
+    if shared is None:
+        return run_batch(group)
+    told = 0.0
+
+    def add(runs_worth: float) -> None:
+        nonlocal told
+        with shared.get_lock():
+            shared.value += runs_worth - told
+        told = runs_worth
+
+    try:
+        return run_batch(group, add)
+    finally:
+        add(0.0)
 
 
 def start_ray(workers: int | None, address: str | None) -> bool:

@@ -12,14 +12,13 @@ from __future__ import annotations
 
 import json
 import math
-from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 
 from swarm.files import write_text_atomic
 from swarm.studies import stats
-from swarm.studies.study import StudySpec, run_study
+from swarm.studies.study import Progress, StudySpec, run_study
 from swarm.studies.sweep import Sweep
 
 #: Runs per size of the quick sweep that suggests a size when the target is missed.
@@ -27,8 +26,6 @@ QUICK_RUNS = 16
 #: Multiples of the planned swarm size the quick sweep tries.
 QUICK_FACTORS = (1.5, 2.0)
 EVALUATION_FILE = "evaluation.json"
-
-Progress = Callable[[int, int], None]
 
 
 def evaluate_plan(

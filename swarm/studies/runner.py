@@ -18,6 +18,7 @@ from __future__ import annotations
 import math
 import time
 from collections import Counter
+from collections.abc import Callable
 from dataclasses import dataclass
 from functools import lru_cache
 
@@ -67,23 +68,34 @@ def _setup(mission_path: str, overrides: tuple[tuple[str, object], ...]):
     return MissionSetup(mission, plan, dt_s=config.dt_s, substep_s=config.substep_s)
 
 
-def run_task(task: RunTask) -> dict:
-    """Simulate one run and return its row (column name -> value)."""
-    from swarm.sim.run import simulate
+def run_task(task: RunTask, working: Callable[[float], None] | None = None) -> dict:
+    """Simulate one run and return its row (column name -> value). `working(share)`: as in
+    `run_batch`, the share of the run's time limit simulated so far."""
+    from swarm.sim.run import WORKING_EVERY_S, simulate
 
     started = time.perf_counter()
     mission, plan = _prepared(task.mission_path, task.overrides)
-    log = simulate(mission, seed=task.seed, plan=plan, record_every_s=math.inf)
+    progress = None
+    if working is not None:
+        said_at = [time.monotonic()]
+
+        def progress(t_s: float, limit_s: float) -> None:
+            if time.monotonic() >= said_at[0] + WORKING_EVERY_S:
+                said_at[0] = time.monotonic()
+                working(min(t_s / limit_s, 1.0))
+
+    log = simulate(mission, seed=task.seed, plan=plan, record_every_s=math.inf, progress=progress)
     return _row(task, mission, plan, log, time.perf_counter() - started)
 
 
-def run_batch(tasks: list[RunTask]) -> list[dict]:
+def run_batch(tasks: list[RunTask], working: Callable[[float], None] | None = None) -> list[dict]:
     """Simulate runs of one point together on the batched core and return their rows, in order
-    (one task: `run_task`, the one-run path)."""
+    (one task: `run_task`, the one-run path). `working(runs_worth)` is told now and then how much
+    of the batch is done, in runs (`swarm.sim.run.simulate_batch`), for a progress bar."""
     from swarm.sim.run import simulate_batch
 
     if len(tasks) == 1:
-        return [run_task(tasks[0])]
+        return [run_task(tasks[0], working)]
     first = tasks[0]
     if any(
         (t.mission_path, t.point, t.overrides) != (first.mission_path, first.point, first.overrides)
@@ -93,7 +105,9 @@ def run_batch(tasks: list[RunTask]) -> list[dict]:
     started = time.perf_counter()
     mission, plan = _prepared(first.mission_path, first.overrides)
     setup = _setup(first.mission_path, first.overrides)
-    logs = simulate_batch(mission, [t.seed for t in tasks], plan=plan, setup=setup, record_every_s=math.inf)
+    logs = simulate_batch(
+        mission, [t.seed for t in tasks], plan=plan, setup=setup, record_every_s=math.inf, working=working
+    )
     share = (time.perf_counter() - started) / len(tasks)
     return [_row(t, mission, plan, log, share) for t, log in zip(tasks, logs, strict=True)]
 

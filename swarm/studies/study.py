@@ -34,7 +34,7 @@ HALF_WIDTHS = (0.1, 0.05)
 #: Runs per stored chunk, at most (a kill loses at most the runs in flight and one chunk's worth).
 CHUNK_RUNS = 20
 
-Progress = Callable[[int, int], None]
+Progress = Callable[[float, int], None]
 
 
 @dataclass(frozen=True)
@@ -104,8 +104,9 @@ def run_study(
     Each worker runs its runs of a point in batches of `batch` runs on the batched world core
     (`swarm.sim.world`; 1: one at a time; None: `backends.auto_batch`): the same table either way
     (apart from `runtime_s`). `progress(done, total)` is called as runs finish (`done` counts runs
-    found from before). The folder is locked while the study writes it: a second study into it
-    raises `FolderBusy`."""
+    found from before) and, on the local backend, now and then in between, with the share of the
+    batches still running that is done added to `done` (a float then). The folder is locked while
+    the study writes it: a second study into it raises `FolderBusy`."""
     if backend not in backends.BACKENDS:
         raise SwarmError(f"study: backend {backend!r}, expected one of {list(backends.BACKENDS)}")
     if batch is not None and batch < 1:
@@ -141,12 +142,17 @@ def _run_locked(
         progress(total - len(tasks), total)
     n_workers = workers or backends.default_workers()
     sizes = _batch_sizes(spec, tasks, batch, n_workers)
+    finished = total - len(tasks)
     if backend == "local":
-        rows = backends.run_local(tasks, n_workers, sizes)
+
+        def working(runs_worth: float) -> None:  # the batches still running, between their rows
+            if progress is not None:
+                progress(finished + runs_worth, total)
+
+        rows = backends.run_local(tasks, n_workers, sizes, working)
     else:
         rows = backends.run_ray(tasks, workers, address, sizes, started=started)
     buffer: list[dict] = []
-    finished = total - len(tasks)
     chunk = max(1, min(CHUNK_RUNS, len(tasks) // (4 * n_workers) or 1))
     try:
         for row in rows:

@@ -113,6 +113,22 @@ def test_a_run_is_the_same_alone_and_in_a_batch_of_any_size(mission_and_plan, al
         _same(alone[seed], log)
 
 
+def test_a_batch_says_how_far_its_runs_have_got_without_changing_them(mission_and_plan, alone, monkeypatch):
+    """`working` hears the batch's progress in runs while its runs are still going (they finish
+    together, so a bar counting finished runs would wait for the end), never more than the runs,
+    never back, and the runs are the same as without it."""
+    monkeypatch.setattr("swarm.sim.run.WORKING_EVERY_S", 0.0)  # every step
+    mission, plan = mission_and_plan
+    said: list[float] = []
+    logs = simulate_batch(mission, SEEDS, plan=plan, working=said.append)
+    for seed, log in zip(SEEDS, logs, strict=True):
+        _same(alone[seed], log)
+    assert said == sorted(said) and said[0] >= 0.0 and said[-1] <= len(SEEDS)
+    partial = [x for x in said if 0.0 < x < 1.0]  # before the first run has finished
+    assert len(set(partial)) > 10
+    assert said[-1] >= len(SEEDS) - 1  # the last call is a step before the last run ends
+
+
 def test_runs_of_a_batch_have_their_own_mines_and_waves(mission_and_plan) -> None:
     mission, plan = mission_and_plan
     world = World(MissionSetup(mission, plan, dt_s=0.5, substep_s=0.25), 3)

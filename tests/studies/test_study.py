@@ -145,6 +145,48 @@ def test_the_table_is_the_same_one_run_at_a_time_and_in_batches(tiny, tmp_path) 
         assert _stable(batched).equals(_stable(one)), b
 
 
+def test_the_progress_moves_while_a_batch_runs(tiny, tmp_path, monkeypatch) -> None:
+    """A batch's runs finish together at its end: between its rows, the study's progress counts
+    the share of the batches still running that is done, as a fraction of runs; the table is the
+    same as without a progress callback."""
+    monkeypatch.setattr("swarm.sim.run.WORKING_EVERY_S", 0.0)
+    spec = StudySpec(str(tiny), runs=3, sweeps=parse_sweeps(["swarm.count=2,3"]), seed=11)
+    calls: list[tuple[float, int]] = []
+    table, _ = run_study(spec, tmp_path / "p", workers=1, batch=3, progress=lambda d, t: calls.append((d, t)))
+    quiet, _ = run_study(spec, tmp_path / "q", workers=1, batch=3)
+    assert _stable(table).equals(_stable(quiet))
+    done = [d for d, _ in calls]
+    assert {t for _, t in calls} == {6} and done[0] == 0 and done[-1] == 6
+    assert len({d for d in done if 0 < d < 3}) > 5  # the first batch, before its rows
+    assert all(0 <= d <= 6 for d in done)
+
+
+def test_a_worker_takes_its_batch_share_back_when_its_rows_are_ready(tiny, monkeypatch) -> None:
+    """On local workers the batches add their progress to one shared count (`run_local` reads it
+    between rows); a batch that ends takes its share back, as its rows count instead."""
+    import multiprocessing
+
+    monkeypatch.setattr("swarm.sim.run.WORKING_EVERY_S", 0.0)
+    shared = multiprocessing.get_context("forkserver").Value("d", 0.0)
+    seen: list[float] = []
+    monkeypatch.setattr(backends, "_WORK_DONE", shared)
+    spec = StudySpec(str(tiny), runs=3, sweeps=parse_sweeps(["swarm.count=3"]), seed=5)
+    group = spec.tasks()
+    real = backends.run_batch
+
+    def watched(tasks, working=None):
+        def tell(x: float) -> None:
+            working(x)
+            seen.append(shared.value)
+
+        return real(tasks, tell)
+
+    monkeypatch.setattr(backends, "run_batch", watched)
+    rows = backends._run_shared(group)
+    assert max(seen) > 1.0 and shared.value == 0.0
+    assert [r["seed"] for r in rows] == [t.seed for t in group]
+
+
 def test_batches_hold_runs_of_one_point_up_to_their_size(tiny) -> None:
     spec = StudySpec(str(tiny), runs=5, sweeps=parse_sweeps(["swarm.count=2,3"]), seed=1)
     groups = backends.batches(spec.tasks(), {0: 2, 1: 5})
