@@ -63,7 +63,7 @@ def _parser() -> argparse.ArgumentParser:
     validate = model_cmds.add_parser(
         "validate", help="run a model from the encoders and score it against truth"
     )
-    run_inputs(validate, many=False)
+    run_inputs(validate, many=True)
     validate.add_argument("--compare", action="store_true", help="also score the other two models")
     validate.add_argument(
         "--fixed-step",
@@ -333,7 +333,10 @@ def _cmd_validate(args: argparse.Namespace) -> int:
     _check_folder(args.out, "--out")
     robot = load_robot(args.robot)
     mode = _choose_mode(args)
-    (run,) = _runs(args, robot)
+    runs = _runs(args, robot)
+    for key, given, what in (("--plot", args.plot, "figure"), ("--out", args.out, "report")):
+        if given is not None and len(runs) > 1:
+            raise InputError("command line", key, f"{len(runs)} runs", f"one run for its {what}")
     models = [args.model] + (
         [m for m in ("skid", "kinematic", "lagrangian") if m != args.model] if args.compare else []
     )
@@ -342,7 +345,10 @@ def _cmd_validate(args: argparse.Namespace) -> int:
             "command line", "--fixed-step", args.fixed_step, f"a step in [{MIN_FIXED_STEP_S:g}, 0.1] seconds"
         )
     opts = {"adaptive": args.adaptive, **({} if args.fixed_step is None else {"dt_s": args.fixed_step})}
-    results = {m: validate(run, robot, mode, m, **(opts if m == "skid" else {})) for m in models}
+    each = [
+        {m: validate(run, robot, mode, m, **(opts if m == "skid" else {})) for m in models} for run in runs
+    ]
+    run, results = runs[0], each[0]
     scores = {m: r[0] for m, r in results.items()}
     if args.plot is not None:
         from swarm.report.validation import plot_validation
@@ -369,9 +375,13 @@ def _cmd_validate(args: argparse.Namespace) -> int:
                 **validation_report(v, date=today()).write_all(args.out),
             }
     if args.json:
-        out = scores[args.model].as_dict()
-        if args.compare:
-            out["compare"] = [scores[m].as_dict() for m in models[1:]]
+        objects = []
+        for results in each:
+            out = results[args.model][0].as_dict()
+            if args.compare:
+                out["compare"] = [results[m][0].as_dict() for m in models[1:]]
+            objects.append(out)
+        out = objects[0] if len(objects) == 1 else {"runs": objects}
         if args.plot is not None:
             out["plot"] = str(args.plot)
         if args.out is not None:
@@ -379,7 +389,7 @@ def _cmd_validate(args: argparse.Namespace) -> int:
         print(json.dumps(out, indent=2))
     else:
         print(f"terrain mode: {mode.name}")
-        print(_table(_score_rows(scores.values())))
+        print(_table(_score_rows([r[0] for results in each for r in results.values()])))
         if args.plot is not None:
             print(f"figure: {args.plot}")
         if written:

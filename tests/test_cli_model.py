@@ -90,6 +90,22 @@ def test_validate_from_ssv_export():
     assert out["duration_s"] == pytest.approx(cols[-1, 0] - cols[0, 0], abs=0.05)
 
 
+def test_validate_scores_every_run_it_is_given(tmp_path):
+    """Several runs (as calibrate takes them) are each scored, each the same as alone; a figure or
+    a report is one run's, so with several runs it is refused in one line."""
+    both = ["--ssv", RUNS / "concrete_straight.ssv", "--ssv", RUNS / "hardsand_square.ssv"]
+    out = validate_json("--robot", ROBOT, *both, "--model", "kinematic")
+    alone = [
+        validate_json("--robot", ROBOT, "--ssv", RUNS / f"{r}.ssv", "--model", "kinematic")
+        for r in ("concrete_straight", "hardsand_square")
+    ]
+    assert out["runs"] == alone
+    refused = swarm("model", "validate", "--robot", ROBOT, *both, "--out", tmp_path / "v")
+    assert refused.returncode == 2 and refused.stderr.count("\n") == 1, refused.stderr
+    assert "--out: found '2 runs', expected one run for its report" in refused.stderr
+    assert not (tmp_path / "v").exists()
+
+
 @pytest.mark.slow
 def test_validate_compare_scores_the_other_two_models():
     out = validate_json(*run_args("concrete_straight"), "--compare")  # default model: skid
