@@ -233,6 +233,13 @@ def _count_runs(bar, done: float, total: int) -> None:
         bar.refresh()
 
 
+def _print_json(value: object, indent: int | None = None) -> None:
+    """One JSON document on stdout, NaN and infinities as null (bare NaN is not JSON)."""
+    from swarm.report.document import jsonable
+
+    print(json.dumps(jsonable(value), indent=indent, allow_nan=False))
+
+
 def _path(text: str) -> Path:
     """A path argument; an empty one is refused (Path("") is the current folder)."""
     if not text.strip():
@@ -386,7 +393,7 @@ def _cmd_validate(args: argparse.Namespace) -> int:
             out["plot"] = str(args.plot)
         if args.out is not None:
             out["out"] = str(args.out)
-        print(json.dumps(out, indent=2))
+        _print_json(out, indent=2)
     else:
         print(f"terrain mode: {mode.name}")
         print(_table(_score_rows([r[0] for results in each for r in results.values()])))
@@ -424,6 +431,8 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
                 )
     if args.max_evaluations < 1:
         raise InputError("command line", "--max-evaluations", args.max_evaluations, "a positive integer")
+    if args.name is not None and not args.name.strip():
+        raise InputError("command line", "--name", args.name, "a non-empty terrain mode name")
     if not args.json:
         print(f"fitting {args.model} coefficients, starting from terrain {chosen}", file=sys.stderr)
     with _bar(desc=f"calibrating {args.model}", unit="sim", disable=args.json) as bar:
@@ -439,25 +448,23 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
         )
     write_calibration(args.out, result, robot, runs)
     if args.json:
-        print(
-            json.dumps(
-                {
-                    "model": result.model,
-                    "mode": result.mode.name,
-                    "fitted_from": base.name,
-                    "fitted_from_why": chosen,
-                    "out": str(args.out),
-                    "parameters": result.parameters,
-                    "std_errors": result.std_errors,
-                    "priors": result.priors,
-                    "resolution": result.resolution,
-                    "held_by_prior": result.held_by_prior,
-                    "warnings": result.warnings,
-                    "before": [s.as_dict() for s in result.before],
-                    "after": [s.as_dict() for s in result.after],
-                },
-                indent=2,
-            )
+        _print_json(
+            {
+                "model": result.model,
+                "mode": result.mode.name,
+                "fitted_from": base.name,
+                "fitted_from_why": chosen,
+                "out": str(args.out),
+                "parameters": result.parameters,
+                "std_errors": result.std_errors,
+                "priors": result.priors,
+                "resolution": result.resolution,
+                "held_by_prior": result.held_by_prior,
+                "warnings": result.warnings,
+                "before": [s.as_dict() for s in result.before],
+                "after": [s.as_dict() for s in result.after],
+            },
+            indent=2,
         )
         return 0
     rows = [["parameter", "fitted", "std error", "prior", "set by"]]
@@ -496,7 +503,7 @@ def _cmd_map_info(args: argparse.Namespace) -> int:
     beach_map, library = _load_map_arg(args)
     info = {"file": str(args.map), **beach_map.summary(library)}
     if args.json:
-        print(json.dumps(info, indent=2))
+        _print_json(info, indent=2)
         return 0
     print(f"map {info['name']} ({args.map})")
     print(
@@ -981,7 +988,7 @@ def _cmd_path(args: argparse.Namespace) -> int:
         out.update(result.as_dict())
         out["robot_half_width_m"] = cm.half_width_m
         out["cost_reference"] = {"mode": cm.speeds.reference_mode, "speed_mps": cm.speeds.reference_speed_mps}
-        print(json.dumps(out))
+        _print_json(out)
         return 0
     print(
         f"path: {result.length_m:.1f} m in {len(result.waypoints_m)} waypoints, cost {result.cost:.1f} "
@@ -1014,7 +1021,7 @@ def _path_benchmark(args: argparse.Namespace, cm, profiles, start, goal) -> int:
         seed=args.seed,
     )
     if args.json:
-        print(json.dumps(export.as_dict()))
+        _print_json(export.as_dict())
         return 0
     s, g = export.start, export.goal
     print(

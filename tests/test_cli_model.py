@@ -391,3 +391,30 @@ def test_calibrate_into_a_folder_it_cannot_write_is_refused_before_the_fit(tmp_p
         f"swarm: error: command line: --out: found '{target}', expected a file in a"
     )
     assert "fitting" not in result.stderr  # it never started
+
+
+def test_calibrate_refuses_an_empty_mode_name(tmp_path):
+    """A mode named '' could not be chosen again: validate took its file's only mode as concrete."""
+    out = tmp_path / "fit.yaml"
+    args = [*run_args("concrete_straight"), "--model", "kinematic", "--name", "", "--out", out]
+    result = swarm("model", "calibrate", *args)
+    assert result.returncode == 2 and len(result.stderr.splitlines()) == 1, result.stderr
+    assert "--name: found '', expected a non-empty terrain mode name" in result.stderr
+    assert not out.exists()
+
+
+def test_a_run_that_goes_nowhere_has_no_verdict_and_valid_json(tmp_path):
+    """Standing still (or a pivot in place) travels no distance: its RMSE is no share of one. The
+    JSON says null (bare NaN is not JSON), the report says there is no verdict."""
+    enc, ref = tmp_path / "still_encoders.txt", tmp_path / "still_truth.txt"
+    enc.write_text("".join(f"{ms}\t0\t0\n" for ms in range(0, 5000, 25)))
+    ref.write_text("".join(f"{t / 100:.4f} 1.0000 2.0000 0.5000\n" for t in range(500)))
+    args = ["--robot", ROBOT, "--encoders", enc, "--truth", ref]
+    result = swarm("model", "validate", *args, "--json")
+    assert result.returncode == 0, result.stderr
+    out = json.loads(result.stdout, parse_constant=lambda c: pytest.fail(f"bare {c} in the JSON"))
+    assert out["distance_m"] == 0.0 and out["path_rmse_pct"] is None
+    result = swarm("model", "validate", *args, "--out", tmp_path / "v")
+    assert result.returncode == 0, result.stderr
+    report = (tmp_path / "v" / "report.md").read_text()
+    assert "NO VERDICT on the accuracy target" in report and "nan" not in report.lower()

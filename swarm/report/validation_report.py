@@ -16,6 +16,7 @@ from __future__ import annotations
 import dataclasses
 import io
 import json
+import math
 from dataclasses import dataclass
 from pathlib import Path
 from typing import get_type_hints
@@ -169,6 +170,12 @@ def validation_data(v: Validation, date: str | None = None) -> dict:
         f"{'MEETS' if met else 'MISSES'} the accuracy target: {v.model} path RMSE {s.path_rmse_m:.3f} m = "
         f"{s.path_rmse_pct:.2f}% of the {s.distance_m:.2f} m travelled (target < {v.target_pct:g}%)"
     )
+    if not math.isfinite(s.path_rmse_pct):  # a pivot in place: no distance to share the error by
+        text = (
+            f"NO VERDICT on the accuracy target (a share of the distance travelled): the run travelled "
+            f"{s.distance_m:.2f} m; {v.model} path RMSE {s.path_rmse_m:.3f} m, heading RMSE "
+            f"{s.heading_rmse_deg:.2f} deg"
+        )
     robot = Path(v.robot).stem if v.robot else None
     return jsonable(
         {

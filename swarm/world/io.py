@@ -296,6 +296,13 @@ def load_geojson_regions(
 # --- the map file ----------------------------------------------------------------------------------
 
 
+#: The fewest rows and columns a grid may have: slopes and gradients need a neighbour each way.
+MIN_GRID_CELLS = 2
+GRID_EXPECTED = f"a 2-D grid of at least {MIN_GRID_CELLS} x {MIN_GRID_CELLS} cells (rows, cols)"
+#: The ESRI ASCII grid's NODATA value when the header has no NODATA_value line.
+ESRI_NODATA = -9999.0
+
+
 def _load_grid(path: Path) -> tuple[np.ndarray, np.ndarray]:
     arrays = read_npz(path, "an .npz grid (numpy.savez) holding arrays 'terrain' and 'elevation_m'")
     names = sorted(arrays)
@@ -313,8 +320,8 @@ def _load_grid(path: Path) -> tuple[np.ndarray, np.ndarray]:
             raise InputError(path, name, "a member that is not a .npy array", f"a {dtype} array")
         if a.dtype != dtype:
             raise InputError(path, name, f"dtype {a.dtype}", f"dtype {dtype}")
-        if a.ndim != 2 or 0 in a.shape:
-            raise InputError(path, name, f"shape {a.shape}", "a non-empty 2-D array (rows, cols)")
+        if a.ndim != 2 or min(a.shape) < MIN_GRID_CELLS:
+            raise InputError(path, name, f"shape {a.shape}", GRID_EXPECTED)
     terrain, elevation = arrays["terrain"], arrays["elevation_m"]
     if terrain.shape != elevation.shape:
         raise InputError(
@@ -458,8 +465,8 @@ def _check_map_for_saving(beach_map: BeachMap, path: Path) -> tuple[np.ndarray, 
     if not np.issubdtype(terrain.dtype, np.integer):
         raise InputError(path, "terrain", f"dtype {terrain.dtype}", "integer class indices")
     elevation = np.asarray(beach_map.elevation_m, dtype=np.float32)
-    if 0 in terrain.shape:
-        raise InputError(path, "terrain", f"shape {terrain.shape}", "a non-empty 2-D grid")
+    if terrain.ndim != 2 or min(terrain.shape) < MIN_GRID_CELLS:
+        raise InputError(path, "terrain", f"shape {terrain.shape}", GRID_EXPECTED)
     if elevation.ndim == 2:
         _check_elevation(path, elevation)
     for rname, region in beach_map.regions.items():
@@ -541,7 +548,8 @@ def read_esri_ascii(
     """Read an ESRI ASCII grid (`.asc`): (elevation float32 with row 0 south, cell_m, origin_m).
 
     Header keys (any case, any order): `ncols`, `nrows`, `xllcorner` or `xllcenter`, `yllcorner`
-    or `yllcenter`, `cellsize`, optional `NODATA_value`. The file lists the northern row first;
+    or `yllcenter`, `cellsize`, optional `NODATA_value` (-9999 without one, the format's
+    default). The grid has at least 2 x 2 cells. The file lists the northern row first;
     the array returned has row 0 at the south, like a map grid. `origin_m` is the south-west
     corner of the grid (a `*center` header is moved half a cell). NODATA cells become NaN and are
     an error unless `fill` gives the elevation to put there.
@@ -583,8 +591,8 @@ def read_esri_ascii(
             raise InputError(path, f"{axis}llcorner", found, f"one of {axis}llcorner or {axis}llcenter")
     ncols, nrows = get("ncols"), get("nrows")
     for key, n in (("ncols", ncols), ("nrows", nrows)):
-        if n != int(n) or n < 1:
-            raise InputError(path, key, n, "a positive whole number")
+        if n != int(n) or n < MIN_GRID_CELLS:
+            raise InputError(path, key, n, f"a whole number >= {MIN_GRID_CELLS} (slopes need neighbours)")
     ncols, nrows = int(ncols), int(nrows)
     cell = get("cellsize")
     if not math.isfinite(cell) or cell <= 0:
@@ -611,8 +619,8 @@ def read_esri_ascii(
             path, "(data)", f"{values.size} values", f"nrows x ncols = {nrows} x {ncols} = {nrows * ncols}"
         )
     grid = values.reshape(nrows, ncols)[::-1].copy()  # northern row first in the file
-    if "nodata_value" in header:
-        grid[grid == get("nodata_value")] = np.nan
+    nodata = get("nodata_value") if "nodata_value" in header else ESRI_NODATA
+    grid[grid == nodata] = np.nan
     missing = ~np.isfinite(grid)
     if missing.any():
         if fill is None:

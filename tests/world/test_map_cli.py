@@ -341,7 +341,7 @@ def _unknown_class(tmp_path: Path, map_file: Path) -> list[object]:
 
 def _nodata_dem(tmp_path: Path, map_file: Path) -> list[object]:
     (tmp_path / "d.asc").write_text(
-        "ncols 2\nnrows 1\nxllcorner 0\nyllcorner 0\ncellsize 1\nNODATA_value -9\n1 -9\n"
+        "ncols 2\nnrows 2\nxllcorner 0\nyllcorner 0\ncellsize 1\nNODATA_value -9\n1 -9\n2 3\n"
     )
     return ["map", "import-dem", tmp_path / "d.asc", "-o", tmp_path / "d.yaml"]
 

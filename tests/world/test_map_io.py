@@ -310,6 +310,17 @@ def test_esri_ascii_nodata(tmp_path):
     assert not np.isnan(elevation).any()
 
 
+def test_esri_ascii_without_a_nodata_line_takes_the_format_s_default(tmp_path):
+    """-9999 is the format's NODATA value when the header names none: a gap, not a 10 km pit."""
+    path = tmp_path / "dem.asc"
+    path.write_text(ASC_CORNER.replace("NODATA_value -9999\n", "").replace("1 2 3 4", "1 -9999 3 4"))
+    with pytest.raises(InputError) as err:
+        read_esri_ascii(path)
+    assert err.value.where == "NODATA_value" and "1 cells" in str(err.value)
+    elevation, _, _ = read_esri_ascii(path, fill=-0.5)
+    assert elevation[2, 1] == np.float32(-0.5)
+
+
 @pytest.mark.parametrize(
     ("text", "where"),
     [
@@ -321,8 +332,21 @@ def test_esri_ascii_nodata(tmp_path):
         (ASC_CORNER.replace("9 10 11 12", "9 10 11"), "(data)"),
         (ASC_CORNER.replace("5 6 7 8", "5 6 x 8"), "line 8"),
         (ASC_CORNER.replace("cellsize 2.0", "cellsize 2.0\nbogus 3"), "line 6"),
+        ("ncols 1\nnrows 1\nxllcorner 0\nyllcorner 0\ncellsize 1\n3\n", "ncols"),
+        ("ncols 3\nnrows 1\nxllcorner 0\nyllcorner 0\ncellsize 1\n3 4 5\n", "nrows"),
     ],
-    ids=["no-cellsize", "negative-cell", "fractional-rows", "no-x", "both-y", "short", "token", "key"],
+    ids=[
+        "no-cellsize",
+        "negative-cell",
+        "fractional-rows",
+        "no-x",
+        "both-y",
+        "short",
+        "token",
+        "key",
+        "one-cell",
+        "one-row",
+    ],
 )
 def test_esri_ascii_errors_name_file_and_key(tmp_path, text, where):
     path = tmp_path / "dem.asc"
