@@ -247,9 +247,20 @@ def _mismatched_runs(tmp_path: Path) -> tuple[list[object], list[str]]:
     return args, [str(truth("concrete_square"))]
 
 
+def _truth_in_millimetres(tmp_path: Path) -> tuple[list[object], list[str]]:
+    """A reference in mm travels 1000 times what the wheels rolled: refused, not calibrated."""
+    mm = tmp_path / "mm_truth.txt"
+    rows = np.loadtxt(truth("concrete_straight"))
+    rows[:, 1:3] *= 1000.0
+    np.savetxt(mm, rows, fmt="%.4f")
+    args = ["--robot", ROBOT, "--encoders", encoders("concrete_straight"), "--truth", mm]
+    return args, [str(mm), "path length", "2495.66 m", "the 2.51 m the wheels rolled", "in metres?"]
+
+
 @pytest.mark.parametrize(
     "case",
     [
+        _truth_in_millimetres,
         _missing_encoders,
         _malformed_encoder_line,
         _negative_mass,

@@ -31,6 +31,13 @@ class Run:
         return float(np.sum(np.hypot(np.diff(self.truth.x_m), np.diff(self.truth.y_m))))
 
 
+#: A skid-steered robot covers about what its wheels roll, less the slip: a reference path longer
+#: than this many times the wheels' rolled distance (plus `TRAVEL_SLACK_M` of noise) is in other
+#: units (millimetres), or of another robot.
+MAX_TRAVEL_PER_ROLL = 3.0
+TRAVEL_SLACK_M = 1.0
+
+
 def _rebased(truth: Truth) -> Truth:
     return Truth(truth.t_s - truth.t_s[0], truth.x_m, truth.y_m, truth.heading_rad, truth.source)
 
@@ -49,7 +56,19 @@ def load_encoder_run(
             f"{ref.t_s[-1]:.2f} s",
             f"about the encoder log's {wheels.duration_s:.2f} s ({encoders}): are these the same run?",
         )
-    return Run(Path(encoders).name.removesuffix("_encoders.txt").removesuffix(".txt"), wheels, ref)
+    run = Run(Path(encoders).name.removesuffix("_encoders.txt").removesuffix(".txt"), wheels, ref)
+    rolled = robot.wheel_radius_m * 0.5 * float(
+        np.abs(np.diff(wheels.left_rad)).sum() + np.abs(np.diff(wheels.right_rad)).sum()
+    )
+    if run.distance_m > MAX_TRAVEL_PER_ROLL * rolled + TRAVEL_SLACK_M:
+        raise InputError(
+            truth,
+            "path length",
+            f"{run.distance_m:.2f} m",
+            f"at most about the {rolled:.2f} m the wheels rolled ({encoders}, the robot's "
+            "wheel_radius_m and encoder ticks): is the reference in metres?",
+        )
+    return run
 
 
 def load_ssv_run(path: str | Path) -> Run:
