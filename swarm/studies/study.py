@@ -177,7 +177,8 @@ def _run_locked(
             "date": datetime.date.today().isoformat(),
         }
     )
-    write_text_atomic(out / "summary.json", json.dumps(summary, indent=1, sort_keys=True) + "\n")
+    # in the order written, not sorted: the sweeps' order is the table's and the report's
+    write_text_atomic(out / "summary.json", json.dumps(summary, indent=1) + "\n")
     return table, summary
 
 

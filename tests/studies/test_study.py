@@ -562,3 +562,14 @@ def test_plan_with_a_seed_and_an_evaluation(tiny, tmp_path, capsys) -> None:
     evaluation = json.loads((out / "evaluation.json").read_text())
     assert evaluation["runs"] == 2
     assert "in simulation" in capsys.readouterr().out
+
+
+def test_the_summary_keeps_the_sweeps_in_their_order(tiny, tmp_path) -> None:
+    """A report rebuilt from summary.json lists the swept keys as the command line gave them (a
+    sorted summary put hazards.* before swarm.count)."""
+    from swarm.report.study_figures import swept_keys
+
+    sweeps = parse_sweeps(["swarm.count=2,3", "hazards.attrition.mtbf_h=1,2"])
+    run_study(StudySpec(str(tiny), runs=1, sweeps=sweeps, seed=3), tmp_path / "s", workers=1)
+    summary = json.loads((tmp_path / "s" / "summary.json").read_text())
+    assert swept_keys(summary) == ["swarm.count", "hazards.attrition.mtbf_h"]
