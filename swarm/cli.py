@@ -1247,9 +1247,33 @@ def _cmd_schema(_args: argparse.Namespace) -> int:
     return 0
 
 
+#: Options whose value is a point "X,Y": a negative X ("-1,40") would read as an option.
+POINT_OPTIONS = ("--from", "--to")
+
+
+def _points_joined(argv: Sequence[str]) -> list[str]:
+    """`--from -1,40` as `--from=-1,40`: argparse takes a value starting with '-' that is not a
+    plain negative number for an option, and says "expected one argument"."""
+    out: list[str] = []
+    it = iter(argv)
+    for token in it:
+        if token in POINT_OPTIONS:
+            value = next(it, None)
+            if value is not None and value.startswith("-") and value[1:2] in tuple(".0123456789"):
+                out.append(f"{token}={value}")
+                continue
+            out.append(token)
+            if value is not None:
+                out.append(value)
+            continue
+        out.append(token)
+    return out
+
+
 def main(argv: Sequence[str] | None = None) -> int:
-    args = _parser().parse_args(argv)
-    args.command_line = " ".join(["swarm", *(sys.argv[1:] if argv is None else argv)])
+    given = list(sys.argv[1:] if argv is None else argv)
+    args = _parser().parse_args(_points_joined(given))
+    args.command_line = " ".join(["swarm", *given])
     try:
         return args.handler(args)
     except SwarmError as exc:

@@ -70,6 +70,9 @@ def test_text_output_with_a_profile(maps, tmp_path):
     [
         (("--from", "15.2,6", "--to", "27,4"), "start (15.2, 6) is on boulder, impassable terrain"),
         (("--from", "3,4", "--to", "40,4"), "goal (40, 4) is outside the map 'wall'"),
+        # a negative x is a point, not an option (argparse said "expected one argument")
+        (("--from", "-1.5,4", "--to", "27,4"), "start (-1.5, 4) is outside the map 'wall'"),
+        (("--from", "3,4", "--to", "-2,4"), "goal (-2, 4) is outside the map 'wall'"),
         (("--from", "6,16", "--to", "27,4"), "start (6, 16) is inside keep-out zone 'minefield'"),
         (("--from", "3,4", "--to", "14.8,5.25"), "goal (14.8, 5.25) is too close to boulder"),
         (("--from", "3;4", "--to", "27,4"), "--from: found '3;4', expected X,Y in metres"),
