@@ -390,7 +390,8 @@ def calibrate(
         fitted = replace(fitted, name=name)
     after = [validate(run, robot, fitted, model, adaptive=False, dt_s=dt_s)[0] for run in runs]
     parameters = dict(zip(names, (float(v) for v in fit.x), strict=True))
-    std_errors, resolution = _uncertainty(fit.jac, fit.fun, problem.n_data, names)
+    prior_sd = problem.sigma if prior_m > 0 else None
+    std_errors, resolution = _uncertainty(fit.jac, fit.fun, problem.n_data, names, prior_sd)
     return Calibration(
         mode=fitted,
         model=model,
@@ -408,19 +409,30 @@ def calibrate(
 
 
 def _uncertainty(
-    jac: np.ndarray, residuals: np.ndarray, n_data: int, names: list[str]
+    jac: np.ndarray,
+    residuals: np.ndarray,
+    n_data: int,
+    names: list[str],
+    prior_sd: np.ndarray | None = None,
 ) -> tuple[dict[str, float], dict[str, float]]:
-    """Standard errors (Gauss-Newton covariance, the data residuals' variance) and the diagonal
-    of the model-resolution matrix (J'J)^-1 J_d'J_d: how much of each estimate the data make."""
+    """Standard errors and the diagonal of the model-resolution matrix (J'J)^-1 J_d'J_d: how much
+    of each estimate the data make.
+
+    The standard errors are the linearized posterior's: the data's information J_d'J_d / s^2 (s^2
+    the data residuals' variance) and each prior's 1 / sd^2 (`prior_sd`; None: the data alone).
+    Not the fit's own prior rows, whose weight is a regularization (`PRIOR_M`): scaled by s^2 they
+    made a parameter the runs cannot see look known to a few per cent of its prior."""
     k = len(names)
     j_data = jac[:n_data]
-    sigma2 = float(residuals[:n_data] @ residuals[:n_data]) / max(1, n_data - k)
-    info = jac.T @ jac
+    sigma2 = max(float(residuals[:n_data] @ residuals[:n_data]) / max(1, n_data - k), 1e-300)
     try:
-        inv = np.linalg.pinv(info)
+        inv = np.linalg.pinv(jac.T @ jac)
+        posterior = j_data.T @ j_data / sigma2
+        if prior_sd is not None:
+            posterior = posterior + np.diag(1.0 / np.asarray(prior_sd, np.float64) ** 2)
+        cov = np.linalg.pinv(posterior)
     except np.linalg.LinAlgError:
         return dict.fromkeys(names, float("inf")), dict.fromkeys(names, 0.0)
-    cov = inv * sigma2
     res = np.diag(inv @ (j_data.T @ j_data))
     std = {n: float(np.sqrt(max(cov[i, i], 0.0))) for i, n in enumerate(names)}
     return std, {n: float(np.clip(res[i], 0.0, 1.0)) for i, n in enumerate(names)}

@@ -166,6 +166,10 @@ def test_a_parameter_the_runs_cannot_see_is_held_by_its_prior_and_reported() -> 
     assert result.parameters["rolling_radius_scale"] == pytest.approx(0.95, abs=0.01)
     sigma = LIB["concrete"].uncertainty["turning_resistance_m"]
     assert result.priors["turning_resistance_m"] == (LIB["concrete"].turning_resistance_m, sigma)
+    # what the runs do not say is as uncertain as the prior says; what they do say, much less
+    assert result.std_errors["turning_resistance_m"] == pytest.approx(sigma, rel=0.02)
+    radius_sd = LIB["concrete"].uncertainty["rolling_radius_scale"]
+    assert result.std_errors["rolling_radius_scale"] < 0.2 * radius_sd
 
 
 @pytest.mark.slow
