@@ -347,6 +347,9 @@ def _cmd_validate(args: argparse.Namespace) -> int:
     models = [args.model] + (
         [m for m in ("skid", "kinematic", "lagrangian") if m != args.model] if args.compare else []
     )
+    for key, given in (("--fixed-step", args.fixed_step is not None), ("--adaptive", args.adaptive)):
+        if given and "skid" not in models:
+            raise InputError("command line", key, f"--model {args.model}", f"{key} with the skid model")
     if args.fixed_step is not None and not MIN_FIXED_STEP_S <= args.fixed_step <= 0.1:
         raise InputError(
             "command line", "--fixed-step", args.fixed_step, f"a step in [{MIN_FIXED_STEP_S:g}, 0.1] seconds"

@@ -257,9 +257,17 @@ def _truth_in_millimetres(tmp_path: Path) -> tuple[list[object], list[str]]:
     return args, [str(mm), "path length", "2495.66 m", "the 2.51 m the wheels rolled", "in metres?"]
 
 
+def _step_without_the_skid_model(tmp_path: Path) -> tuple[list[object], list[str]]:
+    """--fixed-step steers the skid model's integration: with the kinematic model alone it was
+    silently ignored."""
+    args = [*run_args("concrete_straight"), "--model", "kinematic", "--fixed-step", "0.01"]
+    return args, ["--fixed-step", "--model kinematic", "with the skid model"]
+
+
 @pytest.mark.parametrize(
     "case",
     [
+        _step_without_the_skid_model,
         _truth_in_millimetres,
         _missing_encoders,
         _malformed_encoder_line,
