@@ -8,7 +8,7 @@ against scipy's multi-source Dijkstra (`scipy.sparse.csgraph.dijkstra`, `min_onl
 sets of 5 to 25 mines. Prints ms per field for each, the ratio, and whether the distances are
 equal (they must be, float for float).
 
-Takeover routes (`swarm.sim.router`: the default profile, RRT-Connect then OMPL's simplifier)
+Takeover routes (`swarm.planning.router`: the default profile, RRT-Connect then OMPL's simplifier)
 between `--routes` random pairs of free cell centres whose straight line is blocked, with the grid
 motion validator (`swarm.planning.paths._motion_free`) against OMPL's own `DiscreteMotionValidator`
 (a Python call per checked point). Prints ms per route for each, the ratio, and whether the paths

@@ -77,6 +77,9 @@ PHASE_NAMES = ("sea", "surf", "beach")
 #: The losses on the way back to sea after the task window (`return_losses`), reported beside the
 #: phases above but not counted against the tasks: the robots have done their work by then.
 RETURN_PHASE = "return"
+#: The scripted policy hands a lost searcher's track out in pieces of this length (m), a trip to
+#: each (`swarm.sim.policy.TAKEOVER_PIECE_M`).
+TAKEOVER_PIECE_M = 300.0
 #: The simulator's trigger radius (`swarm.sim.mines.DEFAULT_TRIGGER_RADIUS_M`, m).
 TRIGGER_RADIUS_M = 0.25
 #: The simulator's step (`swarm.sim.env.SimConfig.dt_s`, s): the scripted policy steers clear of a
@@ -423,7 +426,7 @@ def search_window_s(mission: Mission, task, start_s: float) -> tuple[float, floa
         retreat = RETREAT_FACTOR * (task.clearance.standoff_m + STANDOFF_MARGIN_M) / v + RETREAT_ALLOWANCE_S
         end = task.clearance.at_s - retreat
     else:
-        end = mission.phases.beach_end_s
+        end = mission.beach_end_s
     end -= WINDOW_SLACK * max(end - start_s, 0.0)
     return start_s, end
 

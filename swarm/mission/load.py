@@ -335,7 +335,7 @@ class _References:
                         raise err([*at, "zones", i], zone, "each landing zone once")
                 self._robots([*at, "robots_per_zone"], task.robots_per_zone, len(task.zones), "zones", count)
             elif task.type == "search":
-                self._search(at, task, count, m.phases.beach_end_s)
+                self._search(at, task, count, m.beach_end_s)
             elif task.type == "relay":
                 self.place([*at, "source"], task.source, ("relay_source",))
                 for i, sink in enumerate(task.sinks):
@@ -434,7 +434,8 @@ class _References:
                     [*at, "clearance", "at_s"],
                     task.clearance.at_s,
                     f"a time before beach operations end, at most {beach_end_s:g} s (the sum of the "
-                    "sea_transit, surf_crossing and beach_operations time limits)",
+                    "sea_transit, surf_crossing and beach_operations time limits; a beach launch's "
+                    "beach_operations alone)",
                 )
 
 

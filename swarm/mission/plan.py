@@ -53,6 +53,7 @@ from swarm.planning.coverage import boustrophedon, split_tracks, swath_coverage
 from swarm.planning.detection import clip_tracks, drivable_segments
 from swarm.planning.radio import RadioParams, comm_range_m, link_margin_db
 from swarm.planning.relay import plan_relays, standable_grid
+from swarm.planning.router import Router
 
 #: Entry cells up to this much farther from the launch point than the nearest one may be chosen
 #: to shorten the way to the goal, metres.
@@ -840,9 +841,12 @@ def _budget(mission: Mission, plan: MissionPlan) -> dict:
     orphaned_s: dict[str, float] = {}  # search time lost searchers leave undone
     spare_s: dict[str, float] = {}  # time the others have for it: reserves, searchers done early
     unseen_blasts = 0.0  # mines expected to go off before any sensor found them
-    ways = [exposure.way_in(mission, cm, rp, heights, ashore, mine_area, by_task) for rp in plan.robots]
-    extra = exposure.off_plan_driving(mission, cm, plan, ways)
-    for rp, way, (more_m, more_inside) in zip(plan.robots, ways, extra, strict=True):
+    # the routes as the robots drive them: stitched around blocked ground, with the simulator's seed
+    router = Router(cm, seed=mission.seed)
+    driven = dataclasses.replace(plan, robots=[exposure.drivable(rp, router) for rp in plan.robots])
+    ways = [exposure.way_in(mission, cm, rp, heights, ashore, mine_area, by_task) for rp in driven.robots]
+    extra = exposure.off_plan_driving(mission, cm, driven, ways)
+    for rp, way, (more_m, more_inside) in zip(driven.robots, ways, extra, strict=True):
         exposed = dataclasses.replace(
             way.exposure,
             driven_m=exposure.add_metres(way.exposure.driven_m, more_m),
@@ -850,7 +854,7 @@ def _budget(mission: Mission, plan: MissionPlan) -> dict:
         )
         losses = budget.robot_losses(mission, cm, exposed)
         # what a study counts: every loss until beach operations end, not only the task's window
-        until_end = max(mission.phases.beach_end_s - way.ashore_s, 0.0)
+        until_end = max(mission.beach_end_s - way.ashore_s, 0.0)
         whole = budget.robot_losses(mission, cm, dataclasses.replace(exposed, beach_s=until_end))
         expected = budget.expected_by_cause(whole)
         for phase, causes in expected.items():

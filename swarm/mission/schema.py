@@ -248,15 +248,6 @@ class Phases(_Model):
     beach_operations: BeachOperations = Field(default_factory=BeachOperations)
     return_to_sea: ReturnToSea = Field(default_factory=ReturnToSea)
 
-    @property
-    def beach_end_s(self) -> float:
-        """Latest mission time (from the first release) beach operations can run to."""
-        return (
-            self.sea_transit.time_limit_s
-            + self.surf_crossing.time_limit_s
-            + self.beach_operations.time_limit_s
-        )
-
 
 # --- tasks ------------------------------------------------------------------------------------------
 
@@ -775,6 +766,16 @@ class Mission(_Model):
             return task.name
         same = [i for i, t in enumerate(self.tasks) if t.type == task.type]
         return f"{task.type}_{same.index(index) + 1}"
+
+    @property
+    def beach_end_s(self) -> float:
+        """Latest mission time (from the first release) beach operations can run to: the sea
+        transit's and the surf crossing's limits, then beach operations'. A beach launch has
+        neither phase: its robots start ashore, and its beach operations run from 0."""
+        p = self.phases
+        if self.launch.platform == "beach":
+            return p.beach_operations.time_limit_s
+        return p.sea_transit.time_limit_s + p.surf_crossing.time_limit_s + p.beach_operations.time_limit_s
 
     def tasks_of(self, task_type: str) -> list:
         return [t for t in self.tasks if t.type == task_type]

@@ -95,7 +95,7 @@ class MissionScore:
         self.recovered = 0
         self.detected = 0
         self.beach_start_s: float | None = None
-        self.beach_end_s = mission.phases.beach_end_s
+        self.beach_end_s = mission.beach_end_s
         self.at_end = False
         #: Without relay, surveillance or beacon criteria the score is a function of the counts
         #: alone, so `score()` keeps its last value with the counts it had.

@@ -33,7 +33,7 @@ RECORD_EVERY_S = 2.0
 def mission_time_s(mission: Mission) -> float:
     """The longest a run can last: every phase's time limit."""
     back = mission.phases.return_to_sea
-    return mission.phases.beach_end_s + (back.time_limit_s if back.enabled else 0.0)
+    return mission.beach_end_s + (back.time_limit_s if back.enabled else 0.0)
 
 
 def estimate_bytes(

@@ -13,7 +13,7 @@ It drives the environment in command mode. Each step it:
    it, as links come and go. Jammed or isolated robots learn nothing.
 3. Every `realloc_period_s`, assigns open items to idle robots that know of them (spares, and
    searchers whose track is done) with the forward auction of `swarm.planning.allocation`, cost the
-   straight-line distance to the item; the winner gets a route there (`swarm.sim.router`). Lost
+   straight-line distance to the item; the winner gets a route there (`swarm.planning.router`). Lost
    stations go first (each is a whole criterion), then the pieces of lost tracks (each a sliver of
    the detection); marks wait until they are due (nobody is searching any more, or the clearance
    is near enough that the nearest free robot must set off).
@@ -198,7 +198,7 @@ class ScriptedPolicy:
             until = min(until, c.at_s - self._watch_s)
         phases = env.mission.phases
         if phases.return_to_sea.enabled and not self._returning:
-            until = min(until, phases.beach_end_s)
+            until = min(until, env.mission.beach_end_s)
         return until
 
     @property
@@ -385,7 +385,7 @@ class ScriptedPolicy:
         """Whether the stand-bys come before the tracks: in the last `STAND_BY_LEAD_S` of beach
         operations."""
         env = self.env
-        return env.t_s + STAND_BY_LEAD_S >= env.mission.phases.beach_end_s
+        return env.t_s + STAND_BY_LEAD_S >= env.mission.beach_end_s
 
     def _end_held_points(self) -> list[tuple[np.ndarray, int]]:
         """The points that must be held when beach operations end (beacons without `hold_s`), each
@@ -740,7 +740,7 @@ class ScriptedPolicy:
             return
         env = self.env
         phases = env.mission.phases
-        if not phases.return_to_sea.enabled or env.t_s + 1e-9 < phases.beach_end_s:
+        if not phases.return_to_sea.enabled or env.t_s + 1e-9 < env.mission.beach_end_s:
             return
         self._returning = True
         for i in np.flatnonzero(env.alive & env.on_map & (env.marking < 0)):

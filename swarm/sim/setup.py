@@ -19,10 +19,10 @@ from scipy.spatial import cKDTree
 from swarm.errors import SwarmError
 from swarm.mission.plan import MissionPlan, place_xy, radio_params
 from swarm.mission.schema import Mission, Radio
+from swarm.planning.router import Router
 from swarm.sim import physics
 from swarm.sim.control import DriveLimits
 from swarm.sim.layout import ROLES
-from swarm.sim.router import Router
 
 #: The largest wheel surface speed, as a multiple of the cruise speed (robot.wheel_speed_mps).
 MAX_WHEEL_SPEED_FACTOR = 1.5
@@ -46,7 +46,7 @@ class MissionSetup:
             raise SwarmError(f"sim: the plan has {len(plan.robots)} robots, the mission {n}")
         self.n = n
         self.dt_s = float(dt_s)
-        self.time_limit_s = m.phases.beach_end_s + (
+        self.time_limit_s = m.beach_end_s + (
             m.phases.return_to_sea.time_limit_s if m.phases.return_to_sea.enabled else 0.0
         )
         self.steps_to_limit = math.ceil(self.time_limit_s / dt_s - 1e-9)

@@ -533,7 +533,7 @@ class World:
             self.runs[b].global_phase("beach_operations")
         phases = s.mission.phases
         if phases.return_to_sea.enabled:
-            late = (self.t_s >= phases.beach_end_s).tolist()
+            late = (self.t_s >= s.mission.beach_end_s).tolist()
             for b in live:
                 if late[b]:
                     self.runs[b].global_phase("return_to_sea")

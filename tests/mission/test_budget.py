@@ -277,6 +277,15 @@ def test_the_simulator_s_step_and_trigger_radius_are_the_budget_s() -> None:
     assert budget.TRIGGER_RADIUS_M == DEFAULT_TRIGGER_RADIUS_M
 
 
+def test_the_policy_s_takeover_pieces_and_standoff_margin_are_the_budget_s() -> None:
+    """The off-plan driving counts a trip to each piece of a lost track and waits outside a found
+    mine's standoff and margin before marking it, as the scripted policy does."""
+    from swarm.sim import policy
+
+    assert budget.TAKEOVER_PIECE_M == policy.TAKEOVER_PIECE_M
+    assert budget.STANDOFF_MARGIN_M == policy.STANDOFF_MARGIN_M
+
+
 @pytest.mark.parametrize("speed", [0.0, 0.3, 0.6])
 def test_a_mine_found_too_late_to_turn_counts_as_met_undetected(mission, speed) -> None:
     """Dead ahead, the robot keeps off a mine only if its sensor finds it a step's travel before
@@ -381,3 +390,44 @@ def test_reserves_drive_more_the_more_searchers_are_expected_lost() -> None:
         assert "spare" in who
         assert all(not metres for (metres, _), role in zip(extra, who, strict=True) if role == "search")
     assert "spare" not in calm_roles
+
+
+def test_the_exposure_counts_a_track_as_the_robots_drive_it(costmap) -> None:
+    """A laid track across blocked ground (a boulder, a log) is driven around it: the plan's
+    exposure measures the stitched track (the simulator's `Router.stitch`), which is longer, free
+    everywhere and between the same ends; a route with nothing in its way is measured as laid."""
+    import dataclasses
+
+    from swarm.mission.exposure import drivable
+    from swarm.mission.plan import RobotPlan
+    from swarm.planning.router import Router
+
+    cm = costmap
+    rows, cols = np.nonzero(cm.blocked)
+    # a blocked cell with free cells 6 m to either side of it along x: a track over it
+    for r, c in zip(rows.tolist(), cols.tolist(), strict=True):
+        x, y = (float(v) for v in cm.center_of(r, c))
+        a, b = np.array([x - 6.0, y]), np.array([x + 6.0, y])
+        if cm.free_at(*a) and cm.free_at(*b) and not cm.segments_free(a[None], b[None])[0]:
+            break
+    else:
+        pytest.fail("no blocked cell with free ground on both sides")
+    ground = np.array([a - [0.0, 20.0], a - [0.0, 0.5]])
+    ground = ground[[cm.free_at(*p) for p in ground]]
+    if len(ground) < 2 or not cm.segments_free(ground[:-1], ground[1:]).all():
+        ground = np.array([a - [0.5, 0.0], a - [0.25, 0.0]])
+    rp = RobotPlan(
+        id="r", role="search", task="t", launch_m=(0.0, 0.0), release_s=0.0,
+        sea_leg_m=np.array([ground[0], ground[0]]), ground_m=ground, track_m=np.array([a, b]),
+        eta_s=0.0, sea_time_s=0.0, ground_time_s=0.0, length_m=0.0,
+    )  # fmt: skip
+    out = drivable(rp, Router(cm, seed=0))
+    laid = float(np.hypot(*(b - a)))
+    legs = np.diff(out.track_m, axis=0)
+    assert float(np.hypot(legs[:, 0], legs[:, 1]).sum()) > laid + 0.1
+    assert np.allclose(out.track_m[0], a) and np.allclose(out.track_m[-1], b)
+    assert cm.segments_free(out.track_m[:-1], out.track_m[1:]).all()
+    assert np.array_equal(out.ground_m, ground)
+    assert cm.segments_free(ground[:-1], ground[1:]).all()
+    station = dataclasses.replace(rp, role="landing", task=None, track_m=np.empty((0, 2)))
+    assert np.array_equal(drivable(station, Router(cm, seed=0)).ground_m, ground)  # nothing in its way

@@ -120,7 +120,7 @@ def test_defaults_fill_what_a_file_leaves_out(monkeypatch):
     assert m.hazards.battery.capacity_wh == 200.0
     assert m.hazards.mines.count is None
     assert m.success.min_detection_fraction == 0.8
-    assert m.phases.beach_end_s == 3600 + 900 + 3600
+    assert m.beach_end_s == 3600 + 900 + 3600  # the defaults' sea transit, surf crossing, beach
     search = m.tasks[1]
     assert search.sensor.model == "inverse_cube"
     assert search.spacing_m == 2.0  # the sweep width
@@ -577,3 +577,18 @@ def test_a_breaker_s_damage_follows_the_logistic_at_its_local_height() -> None:
     assert p[1] == pytest.approx(0.5)
     assert p[2] == pytest.approx(1 / (1 + math.exp(1.7 / 0.5)))
     assert p[2] < p[0] < p[1]
+
+
+def test_a_beach_launch_s_beach_operations_run_from_0_to_their_own_limit() -> None:
+    """A beach launch has no sea transit and no surf crossing: their (default) limits do not delay
+    the end of its beach operations, and a run of it ends there (recon used to run 6900 s, its
+    2400 s plus the unused defaults' 3600 and 900)."""
+    from swarm.mission.load import load_mission
+    from swarm.sim.run import simulate
+
+    recon = load_mission(Path(__file__).resolve().parents[2] / "missions" / "recon.yaml")
+    assert recon.launch.platform == "beach" and recon.phases.beach_operations.time_limit_s == 2400
+    assert recon.beach_end_s == 2400
+    log = simulate(recon, seed=3)
+    assert 2400 - 0.5 <= log.times_s[-1] <= 2400 + 0.5
+    assert all(x["t_s"] <= 2400 + 0.5 for x in log.losses)

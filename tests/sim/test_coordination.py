@@ -528,7 +528,7 @@ def test_a_beacon_held_at_the_end_has_a_stand_by_and_survives_a_late_loss(tmp_pa
     env = SwarmEnv(load_mission(path), action_mode="command")
     policy = ScriptedPolicy(env)
     env.reset(seed=0)
-    end = env.mission.phases.beach_end_s
+    end = env.mission.beach_end_s
     _run(env, policy, end - 20.0)
     point = np.array([55.0, 52.0])
     near = env.alive & (np.hypot(*(env.robot_state[:, :2] - point).T) <= 3.0)
@@ -654,7 +654,7 @@ def test_a_late_loss_at_one_beacon_does_not_pull_the_stand_by_off_the_other(tmp_
     env = SwarmEnv(load_mission(path), action_mode="command")
     policy = ScriptedPolicy(env)
     env.reset(seed=0)
-    end = env.mission.phases.beach_end_s
+    end = env.mission.beach_end_s
     _run(env, policy, end - 40.0)
     here = env.robot_state[:, :2]
     for p in points:
@@ -710,7 +710,7 @@ def test_a_stand_by_waits_out_a_late_clearance_clear_of_the_mines_then_moves_in(
     ]
     gap = np.min(np.hypot(*(mines - env.robot_state[stand_by, :2]).T))
     assert gap >= env.clearance.standoff_m
-    _run(env, policy, env.mission.phases.beach_end_s - 5.0)
+    _run(env, policy, env.mission.beach_end_s - 5.0)
     assert env.cleared and env.alive[stand_by] and env.alive[holder]
     for i in (stand_by, holder):
         assert np.hypot(*(env.robot_state[i, :2] - point)) <= 3.0

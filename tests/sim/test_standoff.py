@@ -15,7 +15,7 @@ from scipy.spatial import cKDTree
 
 from swarm.mission.load import load_mission
 from swarm.planning import build_costmap
-from swarm.sim.router import Router
+from swarm.planning.router import Router
 from swarm.sim.standoff import (
     NO_STEP,
     STEPS,

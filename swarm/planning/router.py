@@ -1,5 +1,7 @@
-"""Routes planned while the mission runs (a spare taking over a lost robot's task, the way back to
-sea): a straight line where the cost map allows it, else an OMPL path with the fast profile.
+"""Routes over a cost map as the robots drive them: a plan's routes stitched around the blocked
+ground they cross (the simulator's initial routes, and the exposure a plan's expected losses
+count), and routes planned while the mission runs (a spare taking over a lost robot's task, the way
+back to sea): a straight line where the cost map allows it, else an OMPL path with the fast profile.
 
 Endpoints that fall on blocked cells (a robot pushed into the footprint margin, a target in the
 water) are moved to the nearest free cell first, and the original target is appended when it is
