@@ -57,8 +57,10 @@ def load_encoder_run(
             f"about the encoder log's {wheels.duration_s:.2f} s ({encoders}): are these the same run?",
         )
     run = Run(Path(encoders).name.removesuffix("_encoders.txt").removesuffix(".txt"), wheels, ref)
-    rolled = robot.wheel_radius_m * 0.5 * float(
-        np.abs(np.diff(wheels.left_rad)).sum() + np.abs(np.diff(wheels.right_rad)).sum()
+    rolled = (
+        robot.wheel_radius_m
+        * 0.5
+        * float(np.abs(np.diff(wheels.left_rad)).sum() + np.abs(np.diff(wheels.right_rad)).sum())
     )
     if run.distance_m > MAX_TRAVEL_PER_ROLL * rolled + TRAVEL_SLACK_M:
         raise InputError(

@@ -179,9 +179,10 @@ class RunView:
         return bool(self.world.in_agents[self.b].any())
 
     # events ------------------------------------------------------------------------------------------
-    def log_event(self, kind: str, robot: int | None = None, **data: Any) -> None:
-        """Append an event at the run's time (with the robot's name and place when given)."""
-        ev: dict[str, Any] = {"t_s": round(self.t_s, 3), "kind": kind}
+    def log_event(self, kind: str, robot: int | None = None, t_s: float | None = None, **data: Any) -> None:
+        """Append an event at the run's time, or at `t_s` (with the robot's name and place when
+        given)."""
+        ev: dict[str, Any] = {"t_s": round(self.t_s if t_s is None else t_s, 3), "kind": kind}
         if robot is not None:
             ev["robot"] = self.possible_agents[robot]
             ev["x_m"] = round(float(self.robot_state[robot, 0]), 2)
@@ -263,14 +264,16 @@ class RunView:
                 self.minefield.marked[self.object_mine[k]] = False
             self.log_event("unmark", int(i), object=int(k))
 
-    def lose(self, i: int, cause: str, **data: Any) -> None:
-        """Take robot i out of the mission now as lost to `cause`, and log it."""
+    def lose(self, i: int, cause: str, t_s: float | None = None, **data: Any) -> None:
+        """Take robot i out of the mission now as lost to `cause`, and log it (at `t_s`: when
+        within a stride skipped at sea it was lost, `World.fast_forward`)."""
         self.alive[i] = False
         self.end_reason[i] = cause
-        self.lost_at[i] = (self.t_s, self.robot_state[i, 0], self.robot_state[i, 1])
+        at = self.t_s if t_s is None else t_s
+        self.lost_at[i] = (at, self.robot_state[i, 0], self.robot_state[i, 1])
         if self.marking[i] >= 0:
             self.unmark(i)
-        self.log_event("loss", i, cause=cause, phase=PHASES[self.phase[i]], **data)
+        self.log_event("loss", i, t_s=t_s, cause=cause, phase=PHASES[self.phase[i]], **data)
 
     def lose_now(self, i: int, cause: str = "failure") -> None:
         """A what-if loss (`SwarmEnv.lose`): reported terminated on the next step, like any loss."""

@@ -80,6 +80,8 @@ TRACK_SAMPLE_S = 5.0
 TYPED_STREAMS_MIN_RUNS = 32
 #: The streams a run's seed is spawned into, in this order (`reset`).
 STREAMS = ("mines", "waves", "sensing", "radio", "hazards", "policy", "rocks")
+#: The causes a continuous hazard's clock decides (`hazards.RATE_CAUSES`), as cause codes.
+_RATE_CAUSE_CODES = np.array([hazards.CAUSES.index(c) for c in hazards.RATE_CAUSES])
 
 
 def is_whole(value: object) -> bool:
@@ -443,7 +445,8 @@ class World:
         offshore), up to one step before the next release or arrival: one stride instead of many
         identical steps. Only memoryless hazards act at sea (random failure, radio dropout), so a
         stride of k steps draws losses with exactly the probability k steps would; a loss is
-        logged at the end of the stride. Returns the steps skipped (0 when a robot is on the map
+        logged when its hazard's clock struck within the stride (the robot leaves the mission at
+        the stride's end). Returns the steps skipped (0 when a robot is on the map
         or the next event is within two steps). Runners use it (`simulate`); `step` never does."""
         s, run, dt = self.setup, self.runs[b], self.dt_s
         alive, phase, on_map = self.alive[b], self.phase[b], self.on_map[b]
@@ -488,7 +491,7 @@ class World:
             isolated_s=np.zeros(n),
             radio_ok=self.radio_ok[b],
         )
-        self.pending_terminated[b] |= self._apply_hazards(inp, [b])
+        self.pending_terminated[b] |= self._apply_hazards(inp, [b], timed=True)
         return k
 
     # mission mechanics ------------------------------------------------------------------------------
@@ -693,9 +696,10 @@ class World:
         lost[going] = self._apply_hazards(inp, live).reshape(len(live), n)
         return lost
 
-    def _apply_hazards(self, inp: hazards.HazardInputs, runs: list[int]) -> np.ndarray:
+    def _apply_hazards(self, inp: hazards.HazardInputs, runs: list[int], timed: bool = False) -> np.ndarray:
         """Draw this step's (or stride's) losses of runs `runs` and log them; returns who was lost
-        (a row per robot of those runs)."""
+        (a row per robot of those runs). `timed`: a loss to a continuous hazard is logged when
+        its clock struck within the stride (`Losses.early_s`), not at the stride's end."""
         assert self.hazard_model is not None
         n = self.n
         losses = self.hazard_model.step(inp, self.stream_of("hazards", runs), runs)
@@ -703,13 +707,21 @@ class World:
         self.radio_ok[runs] = radio_ok.reshape(len(runs), n)
         alive = self.alive[runs].reshape(-1)
         lost = losses.lost & alive
-        for k in np.flatnonzero(lost).tolist():
+        order = np.flatnonzero(lost)
+        early = np.zeros(len(lost)) if losses.early_s is None else losses.early_s
+        if timed:  # logged in the order they happened
+            early = np.where(np.isin(losses.cause, _RATE_CAUSE_CODES), early, 0.0)
+            order = order[np.argsort(-early[order], kind="stable")]
+        for k in order.tolist():
             b, i = runs[k // n], k % n
             cause = hazards.CAUSES[losses.cause[k]]
             extra = {"mine": int(losses.mine[k])} if losses.mine[k] >= 0 else {}
             if extra and self.sensors is not None:
                 self.sensors.dirty(b)
-            self.runs[b].lose(i, cause, **extra)
+            if timed and early[k] > 0.0:
+                self.runs[b].lose(i, cause, t_s=self.runs[b].t_s - float(early[k]), **extra)
+            else:
+                self.runs[b].lose(i, cause, **extra)
         return lost
 
     def _clearance(self, terminated: np.ndarray, live: list[int]) -> None:

@@ -5,6 +5,8 @@ fields and hazards; the scripted policy drives each run through its `RunView` on
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 from tiny_missions import write_mission
@@ -324,3 +326,42 @@ def test_the_controllers_targets_are_the_numpy_rules_at_every_step(mission_and_p
     target, moving = seen_args[-1]
     assert moving[world.n] and not moving[world.n + 1]
     assert np.array_equal(target[world.n], end)
+
+
+def test_a_loss_at_sea_is_logged_when_its_clock_struck_not_at_the_end_of_the_stride(tmp_path) -> None:
+    """The swim in is skipped in strides (`World.fast_forward`); a failure in one is logged at the
+    first event of its exponential clock, so the logged times are the truncated exponential's:
+    E[t | t < T] = 1/rate - T exp(-rate T) / (1 - exp(-rate T)) after release (relay used to log
+    all of its 18 sea losses at 5999.5 s, the end of the swim)."""
+    from swarm.sim.run import simulate_batch
+
+    quiet = {"surf": {"wave_height_m": 0.3, "flip_probability": 0.0}, "immobilization": {"per_km": 0.0}}
+    path = write_mission(
+        tmp_path,
+        "swim",
+        swarm={"count": 20},
+        launch={"platform": "by_hand", "points": ["launch_1"], "offshore_m": 1000, "interval_s": 0},
+        phases={
+            "sea_transit": {"time_limit_s": 3000},
+            "surf_crossing": {"time_limit_s": 300},
+            "beach_operations": {"time_limit_s": 60},
+            "return_to_sea": {"enabled": False},
+        },
+        hazards={**quiet, "attrition": {"mtbf_h": 0.5}},
+    )
+    mission = load_mission(path)
+    plan = plan_mission(mission, seed=mission.seed, workers=1)
+    swim_s = mission.launch.release_offshore_m / mission.robot.swim_speed_mps
+    rate = 1.0 / (mission.hazards.attrition.mtbf_h * 3600.0)
+    at_sea = [
+        x["t_s"]
+        for log in simulate_batch(mission, range(6), plan=plan)
+        for x in log.losses
+        if x["phase"] == "sea_transit" and x["cause"] == "failure"
+    ]
+    times = [t for t in at_sea if t < swim_s]  # the swim in, before the map's own water
+    assert len(times) > 40 and len(set(times)) > 0.9 * len(times)  # spread, not one stride's end
+    assert min(times) > 0.0
+    expected = 1 / rate - swim_s * math.exp(-rate * swim_s) / -math.expm1(-rate * swim_s)
+    sd = math.sqrt(np.var(times) / len(times))
+    assert abs(np.mean(times) - expected) < 4 * sd, (np.mean(times), expected, sd)
