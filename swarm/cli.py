@@ -727,6 +727,12 @@ def _cmd_plan(args: argparse.Namespace) -> int:
 
             seed = mission.seed if args.seed is None else args.seed
             plan = plan_mission(mission, seed=seed, progress=progress, workers=args.workers)
+        from swarm.studies.evaluate import discard_stale, plan_spec
+
+        again = None  # the evaluation this plan gets, if any: an earlier plan's is not this one's
+        if args.evaluate:
+            again = plan_spec(args.mission, args.evaluate, overrides, args.seed, args.target)
+        discard_stale(out, again)
         paths = write_plan(plan, out)
         evaluation = None
         if args.evaluate:

@@ -144,6 +144,35 @@ def test_a_ray_address_where_nothing_answers_is_refused_at_once(tmp_path, capfd)
     assert not out.exists()
 
 
+def test_a_ray_address_where_a_web_server_listens_is_refused_at_once(tmp_path, capfd) -> None:
+    """Ray waited for ever, silently, on a port where something other than a gRPC server answers;
+    the port is asked for an HTTP/2 SETTINGS frame first (a Ray head answers it: checked by hand
+    with `ray start --head`)."""
+    import http.server
+    import threading
+
+    pytest.importorskip("ray")
+
+    class Quiet(http.server.BaseHTTPRequestHandler):
+        def log_message(self, *args: object) -> None:  # its log is on this process's stderr
+            pass
+
+    server = http.server.HTTPServer(("127.0.0.1", 0), Quiet)
+    threading.Thread(target=server.serve_forever, daemon=True).start()
+    port = server.server_address[1]
+    out = tmp_path / "study"
+    argv = ["study", str(REPO / "missions" / "landing.yaml"), "--runs", "2", "--backend", "ray"]
+    try:
+        assert main([*argv, "--address", f"127.0.0.1:{port}", "--out", str(out)]) == 2
+    finally:
+        server.shutdown()
+        server.server_close()
+    err = capfd.readouterr().err
+    assert len(err.splitlines()) == 1
+    assert err.endswith(f"what listens at 127.0.0.1:{port} is not a gRPC server (a Ray port is one)\n")
+    assert not out.exists()
+
+
 def test_a_study_of_more_than_a_million_runs_is_refused_before_any_work(tmp_path, capsys) -> None:
     """`--runs 100000000` spent minutes building its list of runs, and memory with it."""
     landing = str(REPO / "missions" / "landing.yaml")

@@ -164,17 +164,31 @@ def start_ray(workers: int | None, address: str | None) -> bool:
 RAY_CONNECT_TIMEOUT_S = 5.0
 
 
+#: The HTTP/2 client preface and an empty SETTINGS frame (RFC 9113, 3.4 and 6.5): a gRPC server,
+#: as Ray's GCS and client server are, answers with a SETTINGS frame of its own.
+HTTP2_PREFACE = b"PRI * HTTP/2.0\r\n\r\nSM\r\n\r\n" + b"\x00\x00\x00\x04\x00\x00\x00\x00\x00"
+HTTP2_SETTINGS = 0x04
+
+
 def _unreachable(address: str) -> str | None:
-    """Why nothing answers at `address` (HOST:PORT or ray://HOST:PORT), None if something does or
-    the address names no port (e.g. "auto": Ray finds the cluster itself)."""
+    """Why no Ray cluster answers at `address` (HOST:PORT or ray://HOST:PORT), None if one may
+    (a gRPC server, as Ray's ports are) or the address names no port (e.g. "auto": Ray finds the
+    cluster itself). Ray waits for ever on a port where something else listens (a web server)."""
     host, sep, port = address.removeprefix("ray://").rpartition(":")
     if not sep or not port.isdigit():
         return None
+    where = f"{host}:{port}"
     try:
-        with socket.create_connection((host.strip("[]"), int(port)), timeout=RAY_CONNECT_TIMEOUT_S):
-            return None
+        with socket.create_connection((host.strip("[]"), int(port)), timeout=RAY_CONNECT_TIMEOUT_S) as sock:
+            sock.sendall(HTTP2_PREFACE)
+            head = sock.recv(9)
+    except TimeoutError:
+        return f"what listens at {where} says nothing to a gRPC client (a Ray port is a gRPC server)"
     except OSError as exc:
-        return f"nothing answers at {host}:{port} ({exc.strerror or type(exc).__name__})"
+        return f"nothing answers at {where} ({exc.strerror or type(exc).__name__})"
+    if len(head) < 4 or head[3] != HTTP2_SETTINGS:
+        return f"what listens at {where} is not a gRPC server (a Ray port is one)"
+    return None
 
 
 @contextlib.contextmanager

@@ -12,12 +12,15 @@ from __future__ import annotations
 
 import json
 import math
+import shutil
 from pathlib import Path
 
 import numpy as np
 
+from swarm.errors import SwarmError
 from swarm.files import write_text_atomic
 from swarm.studies import stats
+from swarm.studies.store import SPEC, read_study_file
 from swarm.studies.study import Progress, StudySpec, run_study
 from swarm.studies.sweep import Sweep
 
@@ -26,6 +29,50 @@ QUICK_RUNS = 16
 #: Multiples of the planned swarm size the quick sweep tries.
 QUICK_FACTORS = (1.5, 2.0)
 EVALUATION_FILE = "evaluation.json"
+#: The evaluation's studies, in a plan's folder: the plan's own runs, and the quick sweep of sizes.
+EVALUATION_DIR = "evaluation"
+STUDY_DIRS = ("plan", "sizes")
+
+
+def discard_stale(out: str | Path, spec: StudySpec | None) -> None:
+    """Before a plan is written into `out`: drop its earlier evaluation (evaluation.json, which a
+    report would put beside the new plan), and its runs unless they are `spec`'s (the same plan
+    evaluated again resumes them; None: no evaluation this time). A refusal to resume another
+    plan's runs, after the new plan.json, left the folder half rewritten."""
+    (Path(out) / EVALUATION_FILE).unlink(missing_ok=True)
+    folder = Path(out) / EVALUATION_DIR
+    if spec is None:
+        shutil.rmtree(folder, ignore_errors=True)
+        return
+    _fresh(folder / STUDY_DIRS[0], spec)  # the quick sweep's is checked when it is known
+
+
+def _fresh(study: Path, spec: StudySpec) -> None:
+    """Remove the study folder `study` unless it holds `spec`'s runs."""
+    if not study.exists():
+        return
+    try:
+        same = read_study_file(study / SPEC).model_dump() == spec.as_dict()
+    except SwarmError:  # missing or unreadable: not this study's
+        same = False
+    if not same:
+        shutil.rmtree(study)
+
+
+def plan_spec(
+    mission_path: str | Path,
+    runs: int,
+    overrides: dict[str, object] | None = None,
+    plan_seed: int | None = None,
+    target: float = 0.9,
+    confidence: float = 0.95,
+) -> StudySpec:
+    """The study that evaluates a plan: its mission with the overrides held, `runs` runs."""
+    fixed = dict(overrides or {})
+    if plan_seed is not None:
+        fixed["seed"] = plan_seed
+    sweeps = [Sweep(k, (v,)) for k, v in fixed.items()]
+    return StudySpec(str(mission_path), runs, sweeps, seed=0, target=target, confidence=confidence)
 
 
 def evaluate_plan(
@@ -42,13 +89,10 @@ def evaluate_plan(
     progress: Progress | None = None,
 ) -> dict:
     """Simulate the plan `runs` times; write and return the evaluation (module docstring)."""
-    fixed = dict(overrides or {})
-    if plan_seed is not None:
-        fixed["seed"] = plan_seed
-    sweeps = [Sweep(k, (v,)) for k, v in fixed.items()]
-    folder = Path(out) / "evaluation"
-    spec = StudySpec(str(mission_path), runs, sweeps, seed=0, target=target, confidence=confidence)
-    table, summary = run_study(spec, folder / "plan", workers=workers, progress=progress)
+    spec = plan_spec(mission_path, runs, overrides, plan_seed, target, confidence)
+    sweeps = spec.sweeps
+    folder = Path(out) / EVALUATION_DIR
+    table, summary = run_study(spec, folder / STUDY_DIRS[0], workers=workers, progress=progress)
     cols = table.to_pydict()
     (point,) = summary["points"]
     detection = [v for v in cols.get("value_detection", []) if v is not None]
@@ -83,7 +127,8 @@ def evaluate_plan(
             target=target,
             confidence=confidence,
         )
-        _, qs = run_study(quick, folder / "sizes", workers=workers, progress=progress)
+        _fresh(folder / STUDY_DIRS[1], quick)
+        _, qs = run_study(quick, folder / STUDY_DIRS[1], workers=workers, progress=progress)
         result["sizes"] = [
             {
                 "count": p["params"]["swarm.count"],

@@ -391,6 +391,31 @@ def test_plan_evaluate_puts_the_simulations_beside_the_plan(tmp_path, capsys) ->
     assert "The plan in simulation" in (tmp_path / "again.md").read_text()
 
 
+def test_planning_again_into_a_folder_replaces_its_evaluation(tmp_path, capsys) -> None:
+    """Another plan into the same folder: its evaluation is its own (a refusal to resume the old
+    plan's runs came after the new plan.json, and a report then mixed the two); without
+    --evaluate the old evaluation goes; the same plan evaluated again resumes its runs."""
+    mission = _mission(tmp_path, "again", **{"swarm": {"count": 2}})
+    out = tmp_path / "plan"
+
+    def plan(*more: str) -> dict | None:
+        assert main(["plan", str(mission), *more, "--workers", "1", "--out", str(out)]) == 0
+        capsys.readouterr()
+        path = out / "evaluation.json"
+        return json.loads(path.read_text()) if path.exists() else None
+
+    first = plan("--evaluate", "3")
+    parts = sorted((out / "evaluation" / "plan" / "parts").iterdir())
+    assert plan("--evaluate", "3") == first  # resumed: the same runs, the parts kept
+    assert sorted((out / "evaluation" / "plan" / "parts").iterdir()) == parts
+    again = plan("--set", "swarm.count=3", "--evaluate", "3")
+    assert len(json.loads((out / "plan.json").read_text())["robots"]) == 3
+    held = json.loads((out / "evaluation" / "plan" / "study.json").read_text())["sweeps"]
+    assert held["swarm.count"] == [3] and again["runs"] == 3
+    assert plan("--set", "swarm.count=2") is None
+    assert not (out / "evaluation").exists()
+
+
 @pytest.mark.slow
 def test_two_studies_into_one_folder_one_proceeds_and_no_row_is_doubled(tmp_path) -> None:
     """Issue 15: two `swarm study` at once into one --out used to leave 5 rows for a 3-run study."""
