@@ -65,11 +65,15 @@ def answer(summary: dict) -> str:
     required = summary.get("required") or {}
     target = required.get("target", summary.get("target"))
     confidence = required.get("confidence", summary.get("confidence", 0.95))
+    # the other swept (and set) keys at the values the answer holds them at
+    held = ", ".join(required_value_text(k, v) for k, v in (required.get("held") or {}).items())
+    where = f", with {held}" if held else ""
     if required.get("value") is not None and target is not None:
         what = required_value_text(required.get("key", "?"), required["value"])
-        return f"{mission} needs {what} for P(success) >= {target:g} at {percent(confidence)} confidence"
+        goal = f"P(success) >= {target:g} at {percent(confidence)} confidence"
+        return f"{mission} needs {what} for {goal}{where}"
     if required.get("note"):
-        return str(required["note"])
+        return f"{required['note']}{where}"
     points = summary.get("points") or []
     if len(points) == 1:
         p = points[0]

@@ -366,3 +366,17 @@ def test_no_completed_run_says_so(beach_map):
     assert png is not None
     img = Image.open(io.BytesIO(png))
     assert img.width > img.height  # the one-line note, not a grid of panels
+
+
+def test_the_answer_says_where_the_other_swept_keys_are_held() -> None:
+    """Two sweeps: the required size is the one at the other key's first value, and the sentence
+    says so (it read as an answer for every mtbf)."""
+    held = {"hazards.attrition.mtbf_h": 1}
+    found = {"key": "swarm.count", "value": 12, "target": 0.9, "confidence": 0.95, "held": held}
+    assert answer({"mission": "landing", "required": found}) == (
+        "landing needs 12 robots for P(success) >= 0.9 at 95% confidence, with hazards.attrition.mtbf_h = 1"
+    )
+    missed = {**found, "value": None, "note": "none of the swept sizes reaches 0.9 at 95% confidence"}
+    assert answer({"mission": "landing", "required": missed}).endswith(", with hazards.attrition.mtbf_h = 1")
+    alone = {**found, "held": {}}
+    assert answer({"mission": "landing", "required": alone}).endswith("at 95% confidence")
