@@ -386,10 +386,10 @@ def _cmd_validate(args: argparse.Namespace) -> int:
             }
     if args.json:
         objects = []
-        for results in each:
-            out = results[args.model][0].as_dict()
+        for by_model in each:
+            out = by_model[args.model][0].as_dict()
             if args.compare:
-                out["compare"] = [results[m][0].as_dict() for m in models[1:]]
+                out["compare"] = [by_model[m][0].as_dict() for m in models[1:]]
             objects.append(out)
         out = objects[0] if len(objects) == 1 else {"runs": objects}
         if args.plot is not None:
@@ -399,7 +399,7 @@ def _cmd_validate(args: argparse.Namespace) -> int:
         _print_json(out, indent=2)
     else:
         print(f"terrain mode: {mode.name}")
-        print(_table(_score_rows([r[0] for results in each for r in results.values()])))
+        print(_table(_score_rows([r[0] for by_model in each for r in by_model.values()])))
         if args.plot is not None:
             print(f"figure: {args.plot}")
         if written:

@@ -167,7 +167,8 @@ class Losses:
     mine: np.ndarray  # (n,) int index of the mine set off, -1 none
     radio_dropped: np.ndarray  # (n,) bool: the radio failed this step (the robot is lost as "cut_off")
     #: (n,) when in the step a continuous hazard struck, as seconds before its end: the first event
-    #: of its exponential clock, from the uniform that decided it (-log(1 - u) / rate); 0 otherwise
+    #: of its exponential clock, from the uniform that decided it (-log(1 - u) / rate); 0 where
+    #: none did, None when none did for anyone
     early_s: np.ndarray | None = None
 
     @property
@@ -494,10 +495,10 @@ class HazardModel:
             inp.energy_wh, stuck, cont, which, new_boulder, u, float(self._p_collision), hidden,
             inp.wave_hits, p_wave, mine, _RATE_CAUSE_INDEX, cause, dropped,
         )  # fmt: skip
-        early = np.zeros(size)
+        early = None
         if cont.any():  # u < 1 - exp(-rate dt) <=> the clock's first event -log(1 - u) / rate < dt
-            at = -np.log1p(-u[cont, _U_LOST]) / total[cont]
-            early[cont] = np.maximum(inp.dt_s - at, 0.0)
+            early = np.zeros(size)
+            early[cont] = np.maximum(inp.dt_s + np.log1p(-u[cont, _U_LOST]) / total[cont], 0.0)
         return Losses(cause=cause, mine=mine, radio_dropped=dropped, early_s=early)
 
     # --- the rules with state ------------------------------------------------------------------

@@ -708,9 +708,9 @@ class World:
         alive = self.alive[runs].reshape(-1)
         lost = losses.lost & alive
         order = np.flatnonzero(lost)
-        early = np.zeros(len(lost)) if losses.early_s is None else losses.early_s
-        if timed:  # logged in the order they happened
-            early = np.where(np.isin(losses.cause, _RATE_CAUSE_CODES), early, 0.0)
+        early = None  # seconds before the stride's end each loss happened, when timed
+        if timed and losses.early_s is not None:  # logged when, and in the order, they happened
+            early = np.where(np.isin(losses.cause, _RATE_CAUSE_CODES), losses.early_s, 0.0)
             order = order[np.argsort(-early[order], kind="stable")]
         for k in order.tolist():
             b, i = runs[k // n], k % n
@@ -718,10 +718,8 @@ class World:
             extra = {"mine": int(losses.mine[k])} if losses.mine[k] >= 0 else {}
             if extra and self.sensors is not None:
                 self.sensors.dirty(b)
-            if timed and early[k] > 0.0:
-                self.runs[b].lose(i, cause, t_s=self.runs[b].t_s - float(early[k]), **extra)
-            else:
-                self.runs[b].lose(i, cause, **extra)
+            at = None if early is None or early[k] <= 0.0 else self.runs[b].t_s - float(early[k])
+            self.runs[b].lose(i, cause, t_s=at, **extra)
         return lost
 
     def _clearance(self, terminated: np.ndarray, live: list[int]) -> None:
