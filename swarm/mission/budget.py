@@ -312,12 +312,36 @@ def expected_by_cause(
     return out
 
 
-def track_left(losses: dict[str, dict[str, float]]) -> float:
-    """The share of a searcher's track it is expected to leave undriven: all of it when lost on the
-    way in (at sea, in the surf), about half when lost on it at a steady rate."""
+def track_left(losses: dict[str, dict[str, float]], before: dict[str, float], on: dict[str, float]) -> float:
+    """The share of a searcher's track it is expected to leave undriven. `losses`: its whole way's
+    (`robot_losses`); `before`, `on`: the beach causes' probabilities on its way from the surf to
+    its track and along the track. All of the track is left when it is lost at sea, in the surf or
+    ashore before the track starts; 1 - `driven_share` of it when lost on the track; none when lost
+    after it. (mine_clear's searchers drive ~580 s ashore before their tracks start; counting every
+    loss ashore as half a track left put the plan's share at 0.50 where the simulation's searchers
+    leave 0.65.)"""
     by_phase = expected_by_cause(losses)
     early = sum(sum(by_phase[p].values()) for p in ("sea", "surf"))
-    return early + sum(by_phase["beach"].values()) / 2.0
+    h_before, h_on = hazard(before), hazard(on)
+    going = 1.0 - early
+    lost_before = going * -math.expm1(-h_before)
+    lost_on = going * math.exp(-h_before) * -math.expm1(-h_on)
+    return early + lost_before + lost_on * (1.0 - driven_share(h_on))
+
+
+def hazard(causes: dict[str, float]) -> float:
+    """-log P(not lost to any of `causes`), the causes independent (inf when one is certain)."""
+    return sum(-math.log1p(-p) if p < 1.0 else math.inf for p in causes.values())
+
+
+def driven_share(h: float) -> float:
+    """E[share of a stretch driven | lost on it] under a hazard spread evenly along it whose total
+    is `h`: the truncated exponential's mean, 1/h - 1/(e^h - 1); 1/2 as h -> 0, 0 as h -> inf."""
+    if h < 1e-6:
+        return 0.5 - h / 12.0
+    if math.isinf(h):
+        return 0.0
+    return 1.0 / h - 1.0 / math.expm1(h)
 
 
 def lost_probability(losses: dict[str, dict[str, float]], phases: tuple[str, ...] = PHASE_NAMES) -> float:

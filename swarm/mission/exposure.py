@@ -45,21 +45,36 @@ class WayIn:
     last_m: np.ndarray  # where its planned route ends
     track_m: dict[str, float]  # metres of its search tracks on each class
     track_inside_m: float  # of which in the mine area
+    #: its exposure ashore on the way to its track, and along the track (`track_left`)
+    before_track: budget.Exposure | None = None
+    on_track: budget.Exposure | None = None
+
+
+def track_left(mission: Mission, cm: CostMap, way: WayIn, losses: dict[str, dict[str, float]]) -> float:
+    """`budget.track_left` of the searcher of `way`, whose whole way's losses are `losses`."""
+    if way.before_track is None or way.on_track is None:
+        return budget.track_left(losses, {}, losses.get("beach", {}))
+    before = budget.robot_losses(mission, cm, way.before_track)["beach"]
+    on = budget.robot_losses(mission, cm, way.on_track)["beach"]
+    return budget.track_left(losses, before, on)
 
 
 def drivable(rp: RobotPlan, router: Router) -> RobotPlan:
-    """Robot `rp` with its ground route and search tracks as the simulator's robots drive them:
-    stitched around the blocked ground they cross (`Router.stitch`, as `swarm.sim.setup` makes its
-    initial routes: a track over a driftwood log or through a boulder ring goes round it). The
-    laid tracks of mine_clear are 11.5% shorter than the stitched ones."""
+    """Robot `rp` with its ground route and search track (from its first lane's start) as the
+    simulator's robots drive them: stitched around the blocked ground they cross (`Router.stitch`,
+    as `swarm.sim.setup` makes its initial routes: a track over a driftwood log or through a
+    boulder ring goes round it). The laid tracks of mine_clear are 11.5% shorter than the
+    stitched ones."""
     if not len(rp.track_m) and not len(rp.ground_m):
         return rp
     wp = rp.waypoints_m[1:]  # from the entry: the sea leg is open water
     land, where = router.stitch(wp)
     if not len(rp.track_m):
         return dataclasses.replace(rp, ground_m=land)
-    t = int(where[len(wp) - len(rp.track_m)])
-    ground = land[:t] if len(rp.ground_m) else rp.ground_m
+    # the track from its first lane's start, where the ground route ends (the plan's `track_m`
+    # begins at that lane's end), as `swarm.sim.setup` has it
+    t = int(where[len(wp) - len(rp.track_m) - 1])
+    ground = land[: t + 1] if len(rp.ground_m) else rp.ground_m
     return dataclasses.replace(rp, ground_m=ground, track_m=land[t:])
 
 
@@ -98,17 +113,30 @@ def way_in(mission: Mission, cm: CostMap, rp: RobotPlan, heights, ashore, mine_a
         beach_breaker_hazard=wet_hit,
     )
     last = (land if len(land) else on)[-1]
-    return WayIn(exposure, search, arrive, ashore_s, end, last, _dry(mission, track), track_inside)
+    before, on_track = None, None
+    if len(rp.track_m):
+        approach, approach_inside = budget.driven_by_class(cm, rp.ground_m, mine_area)
+        approach = _dry(mission, approach)
+        v = budget.ground_speed(mission, speed)
+        before_s = min(sum(approach.values()) / v, exposure.beach_s)
+        track_s = min(sum(_dry(mission, track).values()) / v, exposure.beach_s - before_s)
+        before = budget.Exposure(0.0, 0.0, before_s, approach, approach_inside, speed_mps=speed)
+        on_track = dataclasses.replace(
+            exposure, sea_s=0.0, surf_s=0.0, beach_s=track_s, driven_m=_dry(mission, track),
+            in_mine_area_m=track_inside,
+        )  # fmt: skip
+    return WayIn(
+        exposure, search, arrive, ashore_s, end, last, _dry(mission, track), track_inside, before, on_track
+    )
 
 
 def off_plan_driving(mission: Mission, cm: CostMap, plan: MissionPlan, ways: list[WayIn]) -> list:
     """What the scripted policy has robots drive beyond their planned routes, for each robot: the
-    metres on each class and in the mine area. A reserve takes over a lost searcher's track (all
-    of it for a searcher lost on the way in, about half for one lost on it at a steady rate) in
-    pieces of `budget.TAKEOVER_PIECE_M`, driving to each piece from its spot, and drives to each
-    mine found to mark it, from where it waits: before a clearance, outside every found mine's
-    standoff and margin; the work goes to the task's reserves, else to the mission's spares, else
-    to its searchers, in equal shares."""
+    metres on each class and in the mine area. A reserve takes over what a lost searcher left of
+    its track (`track_left`) in pieces of `budget.TAKEOVER_PIECE_M`, driving to each piece from
+    its spot, and drives to each mine found to mark it, from where it waits: before a clearance,
+    outside every found mine's standoff and margin; the work goes to the task's reserves, else to
+    the mission's spares, else to its searchers, in equal shares."""
     out: list = [({}, 0.0) for _ in ways]
     for s in plan.search:
         task = next(t for t in mission.tasks_of("search") if t.area == s.area)
@@ -130,7 +158,7 @@ def off_plan_driving(mission: Mission, cm: CostMap, plan: MissionPlan, ways: lis
         inside = 0.0
         for k in searchers:
             losses = budget.robot_losses(mission, cm, ways[k].exposure)
-            left = budget.track_left(losses)
+            left = track_left(mission, cm, ways[k], losses)
             for c, v in ways[k].track_m.items():
                 metres[c] = metres.get(c, 0.0) + left * v
             inside += left * ways[k].track_inside_m

@@ -874,7 +874,8 @@ def _budget(mission: Mission, plan: MissionPlan) -> dict:
             span = max(way.window_end_s - way.arrive_s, 0.0)
             run_s = way.search.design["search_time_s"]
             if rp.role == "search":  # its track left undone if it is lost, its slack if it is not
-                orphaned_s[task] = orphaned_s.get(task, 0.0) + budget.track_left(losses) * run_s
+                left = exposure.track_left(mission, cm, way, losses)
+                orphaned_s[task] = orphaned_s.get(task, 0.0) + left * run_s
                 spare_s[task] = spare_s.get(task, 0.0) + (1.0 - lost) * max(span - run_s, 0.0)
             else:  # a reserve, while it lasts
                 spare_s[task] = spare_s.get(task, 0.0) + span * (1.0 - lost / 2.0)

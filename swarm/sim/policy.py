@@ -244,7 +244,7 @@ class ScriptedPolicy:
                 continue
             it.taken_by, it.audience, reopened = -1, audience.copy(), True
             if it.track:
-                rest = env.routes.remaining_track(i)
+                rest = env.routes.remaining_track(i, env.robot_state[i, :2])
                 if len(rest):
                     it.start_m, it.waypoints_m = rest[0].copy(), rest
         k = int(env.marking[i])
@@ -263,7 +263,8 @@ class ScriptedPolicy:
             self.items.append(WorkItem("route", ROLES[role], goal.copy(), goal[None].copy(),
                                        audience=audience, created_s=t))  # fmt: skip
         elif role == SEARCH:
-            for piece in split_polyline(env.routes.remaining_track(i), TAKEOVER_PIECE_M):
+            rest = env.routes.remaining_track(i, env.robot_state[i, :2])
+            for piece in split_polyline(rest, TAKEOVER_PIECE_M):
                 self.items.append(WorkItem("route", "search", piece[0].copy(), piece, track=True,
                                            audience=audience, created_s=t))  # fmt: skip
 

@@ -40,7 +40,7 @@ class Routes:
         self.start = np.zeros(n, dtype=np.intp)
         self.end = np.zeros(n, dtype=np.intp)
         self.cursor = np.zeros(n, dtype=np.intp)
-        self.sensing_from = np.zeros(n, dtype=np.intp)  # searchers sense from this point index on
+        self.sensing_from = np.zeros(n, dtype=np.intp)  # the first point of a searcher's track
 
     def set(self, i: int, waypoints: np.ndarray, sensing_from: int | None = None) -> None:
         """Give robot i a new route (k, 2); `sensing_from`: index of the first search-track point."""
@@ -107,9 +107,16 @@ class Routes:
         """The waypoints robot i still has to visit (k, 2)."""
         return self.points[self.cursor[i] : self.end[i]].copy()
 
-    def remaining_track(self, i: int) -> np.ndarray:
-        """What is left of robot i's search track (the part from `sensing_from`)."""
-        return self.points[max(self.cursor[i], self.sensing_from[i]) : self.end[i]].copy()
+    def remaining_track(self, i: int, xy: np.ndarray | None = None) -> np.ndarray:
+        """What is left of robot i's search track `points[sensing_from:end]`: all of it until the
+        robot is on it, then from where it stands on the leg it drives (`xy`; without it, from the
+        leg's start) on. Taking the rest from the next waypoint dropped the leg the robot was on: a
+        searcher of mine_clear lost on its first lane, 680 m long, left all of that lane to nobody."""
+        cur, first, end = int(self.cursor[i]), int(self.sensing_from[i]), int(self.end[i])
+        if cur <= first or cur >= end:
+            return self.points[min(first, end) : end].copy()
+        head = self.points[cur - 1 : cur] if xy is None else np.asarray(xy, dtype=np.float64).reshape(1, 2)
+        return np.vstack([head, self.points[cur:end]])
 
     def remaining_m(self, robots: np.ndarray, xy: np.ndarray) -> np.ndarray:
         """(k,) how far each of `robots` (standing at `xy` (k, 2)) has still to drive along its
@@ -197,8 +204,8 @@ class RoutesView:
     def remaining(self, i: int) -> np.ndarray:
         return self.base.remaining(self.offset + i)
 
-    def remaining_track(self, i: int) -> np.ndarray:
-        return self.base.remaining_track(self.offset + i)
+    def remaining_track(self, i: int, xy: np.ndarray | None = None) -> np.ndarray:
+        return self.base.remaining_track(self.offset + i, xy)
 
     def remaining_m(self, robots: np.ndarray, xy: np.ndarray) -> np.ndarray:
         return self.base.remaining_m(np.asarray(robots, dtype=np.intp) + self.offset, xy)

@@ -412,13 +412,13 @@ def test_the_exposure_counts_a_track_as_the_robots_drive_it(costmap) -> None:
             break
     else:
         pytest.fail("no blocked cell with free ground on both sides")
-    ground = np.array([a - [0.0, 20.0], a - [0.0, 0.5]])
-    ground = ground[[cm.free_at(*p) for p in ground]]
-    if len(ground) < 2 or not cm.segments_free(ground[:-1], ground[1:]).all():
-        ground = np.array([a - [0.5, 0.0], a - [0.25, 0.0]])
+    # the ground route ends where the track starts; the plan's track_m goes on from there
+    ground = np.array([a - [0.0, 20.0], a])
+    if not cm.free_at(*ground[0]) or not cm.segments_free(ground[:-1], ground[1:]).all():
+        ground = np.array([a - [0.5, 0.0], a])
     rp = RobotPlan(
         id="r", role="search", task="t", launch_m=(0.0, 0.0), release_s=0.0,
-        sea_leg_m=np.array([ground[0], ground[0]]), ground_m=ground, track_m=np.array([a, b]),
+        sea_leg_m=np.array([ground[0], ground[0]]), ground_m=ground, track_m=b[None],
         eta_s=0.0, sea_time_s=0.0, ground_time_s=0.0, length_m=0.0,
     )  # fmt: skip
     out = drivable(rp, Router(cm, seed=0))
@@ -431,3 +431,31 @@ def test_the_exposure_counts_a_track_as_the_robots_drive_it(costmap) -> None:
     assert cm.segments_free(ground[:-1], ground[1:]).all()
     station = dataclasses.replace(rp, role="landing", task=None, track_m=np.empty((0, 2)))
     assert np.array_equal(drivable(station, Router(cm, seed=0)).ground_m, ground)  # nothing in its way
+
+
+@pytest.mark.parametrize("h", [1e-8, 0.05, 0.7, 3.0, 40.0])
+def test_driven_share_is_the_truncated_exponentials_mean(h) -> None:
+    """E[share driven | lost on the stretch] under an even hazard h, against the integral."""
+    num = integrate.quad(lambda s: s * h * math.exp(-h * s), 0.0, 1.0)[0]
+    den = -math.expm1(-h)
+    assert budget.driven_share(h) == pytest.approx(num / den, rel=1e-6)
+    assert budget.driven_share(math.inf) == 0.0
+
+
+def test_track_left_counts_the_way_to_the_track_whole_and_after_it_nothing() -> None:
+    """Lost before the track starts: all of it left; on it: 1 - driven_share of it; after it
+    (the rest of its window, its slack): none. At sea and in the surf: all of it."""
+    before, on = {"failure": 0.1}, {"immobilized": 0.2}
+    beach = {"failure": 1 - 0.9 * 0.7, "immobilized": 0.2}
+    losses = {"sea": {"failure": 0.05}, "surf": {}, "beach": beach}
+    going = 0.95
+    lost_before = going * 0.1
+    lost_on = going * 0.9 * 0.2
+    want = 0.05 + lost_before + lost_on * (1 - budget.driven_share(-math.log(0.8)))
+    assert budget.track_left(losses, before, on) == pytest.approx(want)
+    # what is lost after the track leaves nothing: more hazard after it changes nothing
+    more = {"sea": losses["sea"], "surf": {}, "beach": {**beach, "failure": 0.9}}
+    assert budget.track_left(more, before, on) == pytest.approx(want)
+    # a small hazard on the track alone leaves about half of it
+    small = {"sea": {}, "surf": {}, "beach": {"failure": 1e-4}}
+    assert budget.track_left(small, {}, {"failure": 1e-4}) == pytest.approx(0.5e-4, rel=1e-3)

@@ -174,7 +174,8 @@ def test_a_lost_searchers_track_is_finished_by_a_spare(tmp_path) -> None:
         policy.update()
         env.advance({})
     _run(env, policy, env.t_s + 60.0)
-    left = env.routes.remaining_track(i)
+    xy = env.robot_state[i, :2].copy()
+    left = env.routes.remaining_track(i, xy)
     env.lose(searcher.id)
     _run(env, policy, env.t_s + 20.0)
     (take,) = [ev for ev in env.events if ev["kind"] == "takeover"]
@@ -192,6 +193,36 @@ def test_a_lost_searchers_track_is_finished_by_a_spare(tmp_path) -> None:
     assert sum(np.hypot(*np.diff(it.waypoints_m, axis=0).T).sum() for it in pieces) == pytest.approx(
         np.hypot(*np.diff(left, axis=0).T).sum()
     )
+    # the rest starts where the searcher stood, on the leg it was driving
+    np.testing.assert_allclose(pieces[0].waypoints_m[0], xy)
+
+
+def test_a_searcher_lost_before_its_track_leaves_all_of_it(tmp_path) -> None:
+    """Its first lane too: the plan's `track_m` starts at that lane's end, where the ground
+    route ends at its start (the rest was taken from the first track point on, and the first
+    lane, 680 m on mine_clear, went to nobody)."""
+    search = {
+        "type": "search",
+        "area": "search_beach",
+        "sensor": {"model": "cookie_cutter", "sweep_width_m": 4.0},
+        "robots": 1,
+        "mark": False,
+    }
+    path = write_mission(tmp_path, swarm={"count": 2}, tasks=[search], hazards=QUIET)
+    env = SwarmEnv(load_mission(path), action_mode="command")
+    policy = ScriptedPolicy(env)
+    env.reset(seed=0)
+    rp = next(r for r in env.plan.robots if r.role == "search")
+    env.lose(rp.id)
+    policy.update()
+    pieces = [it.waypoints_m for it in policy.items if it.kind == "route" and it.track]
+    start = rp.ground_m[-1]
+    assert not np.allclose(start, rp.track_m[0])  # the first lane joins them
+    np.testing.assert_allclose(pieces[0][0], env.router.reachable(start))
+    laid = np.vstack([start, rp.track_m])
+    # stitched around blocked ground: at least the laid length, never less
+    driven = sum(np.hypot(*np.diff(p, axis=0).T).sum() for p in pieces)
+    assert driven >= np.hypot(*np.diff(laid, axis=0).T).sum() - 1e-6
 
 
 def test_split_polyline_pieces_join_up_and_keep_every_vertex() -> None:
