@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import json
+import math
 import os
 import sys
 import tempfile
@@ -316,6 +317,7 @@ def _table(rows: Sequence[Sequence[str]]) -> str:
 
 
 def _score_rows(scores) -> list[list[str]]:
+    """The score table; a run that travelled no distance has no RMSE share ("n/a", not "nan")."""
     rows = [["model", "run", "distance m", "final err m", "path RMSE m", "RMSE % dist", "heading RMSE deg"]]
     for s in scores:
         rows.append(
@@ -325,11 +327,21 @@ def _score_rows(scores) -> list[list[str]]:
                 f"{s.distance_m:.2f}",
                 f"{s.final_error_m:.3f}",
                 f"{s.path_rmse_m:.3f}",
-                f"{s.path_rmse_pct:.2f}",
+                f"{s.path_rmse_pct:.2f}" if math.isfinite(s.path_rmse_pct) else "n/a",
                 f"{s.heading_rmse_deg:.2f}",
             ]
         )
     return rows
+
+
+def _no_distance_notes(scores) -> list[str]:
+    """One line per run that travelled no distance, saying why its RMSE % is n/a (as the
+    validation report's NO VERDICT does)."""
+    runs = dict.fromkeys(s.run for s in scores if not math.isfinite(s.path_rmse_pct))
+    return [
+        f"{run}: no verdict (RMSE % dist n/a): the run travelled no distance to share the error by"
+        for run in runs
+    ]
 
 
 def _cmd_validate(args: argparse.Namespace) -> int:
@@ -399,7 +411,10 @@ def _cmd_validate(args: argparse.Namespace) -> int:
         _print_json(out, indent=2)
     else:
         print(f"terrain mode: {mode.name}")
-        print(_table(_score_rows([r[0] for by_model in each for r in by_model.values()])))
+        validated = [r[0] for by_model in each for r in by_model.values()]
+        print(_table(_score_rows(validated)))
+        for line in _no_distance_notes(validated):
+            print(line)
         if args.plot is not None:
             print(f"figure: {args.plot}")
         if written:
@@ -483,6 +498,8 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
     rows = [before[0]] + [[f"{r[0]} (start)", *r[1:]] for r in before[1:]]
     rows += [[f"{r[0]} (fitted)", *r[1:]] for r in after[1:]]
     print(_table(rows))
+    for line in _no_distance_notes(result.before):
+        print(line)
     print(f"wrote terrain mode '{result.mode.name}' to {args.out}, fitted from terrain {chosen}")
     return 0
 

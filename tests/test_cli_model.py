@@ -422,13 +422,18 @@ def test_calibrate_refuses_an_empty_mode_name(tmp_path):
     assert not out.exists()
 
 
-def test_a_run_that_goes_nowhere_has_no_verdict_and_valid_json(tmp_path):
-    """Standing still (or a pivot in place) travels no distance: its RMSE is no share of one. The
-    JSON says null (bare NaN is not JSON), the report says there is no verdict."""
+def _still_run(tmp_path: Path) -> list[object]:
+    """A run that stands still for 5 s: it travels no distance."""
     enc, ref = tmp_path / "still_encoders.txt", tmp_path / "still_truth.txt"
     enc.write_text("".join(f"{ms}\t0\t0\n" for ms in range(0, 5000, 25)))
     ref.write_text("".join(f"{t / 100:.4f} 1.0000 2.0000 0.5000\n" for t in range(500)))
-    args = ["--robot", ROBOT, "--encoders", enc, "--truth", ref]
+    return ["--encoders", enc, "--truth", ref]
+
+
+def test_a_run_that_goes_nowhere_has_no_verdict_and_valid_json(tmp_path):
+    """Standing still (or a pivot in place) travels no distance: its RMSE is no share of one. The
+    JSON says null (bare NaN is not JSON), the report says there is no verdict."""
+    args = ["--robot", ROBOT, *_still_run(tmp_path)]
     result = swarm("model", "validate", *args, "--json")
     assert result.returncode == 0, result.stderr
     out = json.loads(result.stdout, parse_constant=lambda c: pytest.fail(f"bare {c} in the JSON"))
@@ -437,3 +442,20 @@ def test_a_run_that_goes_nowhere_has_no_verdict_and_valid_json(tmp_path):
     assert result.returncode == 0, result.stderr
     report = (tmp_path / "v" / "report.md").read_text()
     assert "NO VERDICT on the accuracy target" in report and "nan" not in report.lower()
+
+
+def test_calibrate_with_a_run_that_goes_nowhere_writes_null_and_says_no_verdict(tmp_path):
+    """Calibrate scored such a run as validate does, but wrote `.nan` into its YAML and printed
+    "nan": the YAML says null, the table "n/a" and a line says there is no verdict for that run."""
+    out = tmp_path / "fit.yaml"
+    args = [*run_args("concrete_straight"), *_still_run(tmp_path), "--model", "kinematic", "--out", out]
+    result = swarm("model", "calibrate", *args)
+    assert result.returncode == 0, result.stderr
+    assert "nan" not in out.read_text().lower()
+    scores = yaml.safe_load(out.read_text())["fitted"]["path_rmse_pct"]
+    assert scores["still"] == {"before": None, "after": None}
+    assert all(isinstance(v, float) for v in scores["concrete_straight"].values())
+    assert "nan" not in result.stdout.lower()
+    still_rows = [line.split() for line in result.stdout.splitlines() if line.split()[2:3] == ["still"]]
+    assert len(still_rows) == 2 and all(row[-2] == "n/a" for row in still_rows)
+    assert "still: no verdict (RMSE % dist n/a)" in result.stdout

@@ -22,6 +22,7 @@ what one run does.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -438,6 +439,12 @@ def _uncertainty(
     return std, {n: float(np.clip(res[i], 0.0, 1.0)) for i, n in enumerate(names)}
 
 
+def _pct(value: float) -> float | None:
+    """A run's RMSE as % of distance for the YAML: null for a run that travelled no distance (its
+    score is NaN, no share of anything; YAML's `.nan` reads back as a number, which it is not)."""
+    return round(value, 3) if math.isfinite(value) else None
+
+
 def write_calibration(path: str | Path, result: Calibration, robot: RobotParams, runs: Sequence[Run]) -> None:
     """Write the fitted mode as a terrain YAML that `--terrain` and the rest of the project read."""
     doc = {
@@ -452,7 +459,7 @@ def write_calibration(path: str | Path, result: Calibration, robot: RobotParams,
             "held_by_prior": result.held_by_prior,
             "warnings": result.warnings,
             "path_rmse_pct": {
-                b.run: {"before": round(b.path_rmse_pct, 3), "after": round(a.path_rmse_pct, 3)}
+                b.run: {"before": _pct(b.path_rmse_pct), "after": _pct(a.path_rmse_pct)}
                 for b, a in zip(result.before, result.after, strict=True)
             },
         },
