@@ -111,7 +111,10 @@ def default_query(cm: CostMap) -> tuple[tuple[float, float], tuple[float, float]
 
 
 def summarize_log(path: str | Path) -> list[PlannerSummary]:
-    """Read an OMPL benchmark log the way ompl_benchmark_statistics.py does (into SQLite)."""
+    """Read an OMPL benchmark log the way ompl_benchmark_statistics.py does (into SQLite).
+
+    A planner's mean length is that of the paths its runs return: simplified, when the benchmark
+    simplified them, as `swarm path` returns its path."""
     from ompl import tools as ot
 
     with tempfile.TemporaryDirectory() as tmp:
@@ -122,9 +125,16 @@ def summarize_log(path: str | Path) -> list[PlannerSummary]:
         try:
             columns = {row[1] for row in con.execute("PRAGMA table_info(runs)")}
             cost = "AVG(best_cost)" if "best_cost" in columns else "NULL"
+            # the length of the path a run returns: the simplified one when the benchmark
+            # simplified (solution_length is the planner's raw path, before simplification)
+            length = (
+                "COALESCE(simplified_solution_length, solution_length)"
+                if "simplified_solution_length" in columns
+                else "solution_length"
+            )
             rows = con.execute(
                 "SELECT plannerConfigs.name, COUNT(*), SUM(solved), AVG(time), "
-                f"AVG(CASE WHEN solved THEN solution_length END), {cost} "
+                f"AVG(CASE WHEN solved THEN {length} END), {cost} "
                 "FROM runs JOIN plannerConfigs ON runs.plannerid = plannerConfigs.id "
                 "GROUP BY plannerConfigs.id ORDER BY plannerConfigs.id"
             ).fetchall()

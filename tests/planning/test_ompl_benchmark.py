@@ -11,7 +11,14 @@ import pytest
 from conftest import GOAL, OPTIMAL, ROADMAP, START
 
 from swarm.errors import InputError
-from swarm.planning.benchmark import choose_objective, default_query, export_benchmark
+from swarm.planning.benchmark import (
+    _run_benchmark,
+    choose_objective,
+    default_query,
+    export_benchmark,
+    summarize_log,
+)
+from swarm.planning.paths import _objective_value, _states_xy
 from swarm.planning.profiles import DEFAULT_PROFILE
 
 
@@ -62,3 +69,33 @@ def test_objective_choice():
 def test_duplicate_profile_names_are_refused(wall_costmap, tmp_path):
     with pytest.raises(InputError, match="profiles with different names"):
         export_benchmark(wall_costmap, [DEFAULT_PROFILE, replace(OPTIMAL, name="fast")], tmp_path / "b.log")
+
+
+def test_benchmark_length_is_the_returned_paths_length(wall_costmap, tmp_path, monkeypatch):
+    """With simplification on (the fast profile), each run returns the simplified path; the
+    summary's mean length was the raw path's (`solution length`), longer by a tenth or more. Each run's path
+    is caught after the run (OMPL's post-run event) and measured as a polyline."""
+    import ompl.tools
+
+    real, lengths = ompl.tools.Benchmark, []
+
+    class Spy:
+        """OMPL's Benchmark, measuring each run's solution path as the run ends."""
+
+        def __init__(self, ss, name: str) -> None:
+            self._bench = real(ss, name)
+            self._bench.setPostRunEvent(
+                lambda planner, run: lengths.append(
+                    _objective_value(wall_costmap, "length", _states_xy(ss.getSolutionPath()))
+                )
+            )
+
+        def __getattr__(self, name: str):
+            return getattr(self._bench, name)
+
+    monkeypatch.setattr(ompl.tools, "Benchmark", Spy)
+    log = tmp_path / "bench.log"
+    _run_benchmark(wall_costmap, (DEFAULT_PROFILE,), str(log), START, GOAL, "length", 1.0, 3, 0)
+    (summary,) = summarize_log(log)
+    assert summary.solved == 3 and len(lengths) == 3
+    assert summary.mean_length_m == pytest.approx(sum(lengths) / 3, rel=1e-5)
