@@ -51,6 +51,13 @@ def _fmt(value: object, spec: str) -> str:
     return MISSING if x is None else format(x, spec)
 
 
+def _seconds(value: object) -> str:
+    """Whole seconds, as the project prints times, a half rounded up: a median of an even number
+    of runs is often x.5, and format's half-to-even printed 2746.5 as 2746 but 2747.5 as 2748."""
+    x = _number(value)
+    return MISSING if x is None else str(math.floor(x + 0.5))
+
+
 def required_value_text(key: str, value: object) -> str:
     """'30 robots' for a count the project names, else 'key = value'."""
     if key in KEY_NOUNS:
@@ -164,7 +171,7 @@ def study_rows(summary: dict) -> list[list[str]]:
                 _fmt(p.get("success_rate"), ".3f"),
                 f"{_fmt(p.get('wilson_low'), '.3f')} to {_fmt(p.get('wilson_high'), '.3f')}",
                 meets,
-                _fmt(median, ".0f"),
+                _seconds(median),
                 _fmt(p.get("lost_mean"), ".2f"),
                 _fmt(p.get("planned_lost"), ".2f"),
                 MISSING if needed is None else f"{needed:.0f}",

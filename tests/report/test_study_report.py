@@ -380,3 +380,14 @@ def test_the_answer_says_where_the_other_swept_keys_are_held() -> None:
     assert answer({"mission": "landing", "required": missed}).endswith(", with hazards.attrition.mtbf_h = 1")
     alone = {**found, "held": {}}
     assert answer({"mission": "landing", "required": alone}).endswith("at 95% confidence")
+
+
+@pytest.mark.parametrize(
+    ("median", "shown"), [(2746.5, "2747"), (2747.5, "2748"), (1850.25, "1850"), (None, "-")]
+)
+def test_a_median_time_of_x_5_rounds_half_up(median: float | None, shown: str) -> None:
+    """Two runs that complete at 1846 and 1855 s have median 1850.5: it printed 1850 (Python's
+    round half to even), 2747.5 printed 2748. Whole seconds, a half up, as other times are shown."""
+    point = {"params": {}, "runs": 2, "successes": 2, "completed_s": {"completed": 2, "median": median}}
+    rows = study_rows({"points": [point]})
+    assert column(rows, "median time to success (s)") == [shown]
