@@ -459,3 +459,19 @@ def test_calibrate_with_a_run_that_goes_nowhere_writes_null_and_says_no_verdict(
     still_rows = [line.split() for line in result.stdout.splitlines() if line.split()[2:3] == ["still"]]
     assert len(still_rows) == 2 and all(row[-2] == "n/a" for row in still_rows)
     assert "still: no verdict (RMSE % dist n/a)" in result.stdout
+
+
+def test_calibrate_that_runs_out_of_evaluations_says_so(tmp_path):
+    """A fit stopped by --max-evaluations (scipy's status 0) was reported as if it had converged:
+    one warning line names the flag and the budget, and the YAML's warnings keep it."""
+    out = tmp_path / "fit.yaml"
+    args = [*run_args("concrete_straight"), "--model", "kinematic", "--out", out]
+    result = swarm("model", "calibrate", *args, "--max-evaluations", "2")
+    assert result.returncode == 0, result.stderr
+    expected = "calibration stopped at --max-evaluations 2 before converging; the fit may be poor"
+    warnings = [line for line in result.stderr.splitlines() if line.startswith("warning:")]
+    assert len(warnings) == 1 and expected in warnings[0], result.stderr
+    assert [w for w in yaml.safe_load(out.read_text())["fitted"]["warnings"] if expected in w]
+    converged = swarm("model", "calibrate", *args)  # the default budget: it converges, no warning
+    assert converged.returncode == 0 and "warning:" not in converged.stderr, converged.stderr
+    assert yaml.safe_load(out.read_text())["fitted"]["warnings"] == []

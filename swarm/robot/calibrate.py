@@ -328,6 +328,15 @@ def physical_warnings(values: dict[str, float], robot: RobotParams) -> list[str]
     return out
 
 
+def budget_warning(max_evaluations: int) -> str:
+    """The line for a fit that ran out of evaluations (scipy's status 0): its values are wherever
+    the budget stopped them, and nothing else would say that they are not a converged fit."""
+    return (
+        f"calibration stopped at --max-evaluations {max_evaluations} before converging; "
+        "the fit may be poor: raise --max-evaluations"
+    )
+
+
 def calibrate(
     runs: Sequence[Run],
     robot: RobotParams,
@@ -345,7 +354,9 @@ def calibrate(
 
     For `skid` the free parameters are terrain coefficients (default: all in `SKID_BOUNDS`); for
     `kinematic` the ICR speed and track factors; for `lagrangian` the two inertia scales.
-    `prior_m` weighs the pull toward the starting values (0: none).
+    `prior_m` weighs the pull toward the starting values (0: none). `max_evaluations` is the
+    final fit's budget (`--max-evaluations`); a fit that runs out of it before converging says so
+    in `warnings`.
     """
     names = list(free) if free is not None else default_free(model, robot)
     allowed = [*MODEL_BOUNDS[model], *(COM_PARAMS if model == "skid" else ())]
@@ -383,6 +394,7 @@ def calibrate(
         xtol=1e-6,
         ftol=1e-6,
     )
+    notes = [] if fit.status != 0 else [budget_warning(max_evaluations)]
     fitted = problem.mode_for(fit.x)
     origin = f"fitted to {', '.join(r.name for r in runs)} by swarm model calibrate ({model} model)"
     if model == "skid":
@@ -405,7 +417,7 @@ def calibrate(
             n: (float(v), float(sd)) for n, v, sd in zip(names, problem.start, problem.sigma, strict=True)
         },
         resolution=resolution,
-        warnings=physical_warnings(parameters, robot) if model == "skid" else [],
+        warnings=notes + (physical_warnings(parameters, robot) if model == "skid" else []),
     )
 
 
