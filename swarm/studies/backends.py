@@ -13,6 +13,7 @@ stepped together on the batched world core cost little more than one, and give t
 from __future__ import annotations
 
 import contextlib
+import logging
 import math
 import multiprocessing
 import os
@@ -147,7 +148,15 @@ def start_ray(workers: int | None, address: str | None) -> bool:
     unreachable = None if address is None else _unreachable(address)
     if unreachable is not None:  # Ray itself waits 20 s for a silent host, and for ever for some
         raise InputError("command line", "--address", address, f"{expected}: {unreachable}")
-    kwargs: dict = {"include_dashboard": False, "log_to_driver": False, "configure_logging": False}
+    # Ray's "ray" logger at ERROR (ray.init's own logging_level): a local start printed a
+    # warning that token authentication is on (Ray 2.5x turns it on for a cluster it starts), and
+    # a connection one that a token was found; only real errors are the user's business
+    kwargs: dict = {
+        "include_dashboard": False,
+        "log_to_driver": False,
+        "configure_logging": True,
+        "logging_level": logging.ERROR,
+    }
     try:
         if address is not None:
             with _native_stderr_muted():

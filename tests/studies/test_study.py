@@ -218,6 +218,23 @@ def test_the_ray_backend_gives_the_same_table(reference, tmp_path) -> None:
 
 
 @pytest.mark.slow
+def test_the_ray_backend_starts_quietly(tiny, tmp_path) -> None:
+    """`swarm study --backend ray` printed Ray's "Token authentication is enabled for this Ray
+    cluster..." warning on a local start: stderr holds the progress bar and nothing else."""
+    pytest.importorskip("ray")  # the `ray` extra; CI installs it
+    env = {k: v for k, v in os.environ.items() if k != "RAY_AUTH_MODE"}  # Ray's default: it warns
+    out = tmp_path / "s"
+    argv = ["study", str(tiny), "--runs", "2", "--backend", "ray", "--workers", "1", "--out", str(out)]
+    done = subprocess.run(
+        [sys.executable, "-m", "swarm.cli", *argv], capture_output=True, text=True, timeout=300, env=env
+    )
+    assert done.returncode == 0, done.stderr
+    lines = [x.strip() for x in done.stderr.replace("\r", "\n").splitlines() if x.strip()]
+    assert not [x for x in lines if "token" in x.lower()], done.stderr
+    assert all(x.startswith("study:") for x in lines), done.stderr
+
+
+@pytest.mark.slow
 def test_a_resume_with_other_arguments_is_refused(reference, tmp_path) -> None:
     spec, _ = reference
     out = tmp_path / "one"
