@@ -132,6 +132,20 @@ def apply_overrides(
     return out
 
 
+def value_at(mission: Mission, path: str) -> object:
+    """The value at a dotted key path (as `apply_overrides` takes) of a validated mission: what the
+    schema made of the value given there (`swarm.count` 10.0 is the integer 10)."""
+    node: Any = mission
+    for part in _split(path):
+        if isinstance(node, Mapping):
+            node = node[part]
+        elif isinstance(node, list | tuple):
+            node = node[int(part)]
+        else:
+            node = getattr(node, part)
+    return node
+
+
 # --- validation and references --------------------------------------------------------------------------
 
 

@@ -14,7 +14,7 @@ import datetime
 import json
 from collections import Counter
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -112,7 +112,8 @@ def run_study(
     if batch is not None and batch < 1:
         raise SwarmError(f"study: batch must be >= 1, found {batch}")
     at_once = (workers or backends.default_workers()) if backend == "local" else 1
-    check_points(spec.mission_path, spec.sweeps, at_once=at_once)
+    # the swept values as the schema reads them: an integer key's 10.0 is 10 in every output
+    spec = replace(spec, sweeps=check_points(spec.mission_path, spec.sweeps, at_once=at_once))
     with folder_lock(out):
         return _run_locked(spec, Path(out), backend, workers, address, progress, batch)
 

@@ -2,8 +2,9 @@
 their product.
 
 VALUES is a list, ``0.5,1,2``, or an inclusive range ``start:stop:step`` (``10:60:10`` is 10, 20,
-..., 60); each value is read as YAML (``20`` an integer, ``1.5`` a number, ``true``, text). KEY is
-a dotted key path of the mission schema, as `--set` and `parallel_env(overrides=...)` take
+..., 60); each value is read as YAML (``20`` an integer, ``1.5`` a number, ``true``, text), then
+as the schema reads its key (`check_points`: an integer key's ``10.0`` is 10, ``10.5`` an error).
+KEY is a dotted key path of the mission schema, as `--set` and `parallel_env(overrides=...)` take
 (`swarm.mission.load.apply_overrides`). Every point is checked against the schema before a single
 run starts, so a bad key or value is one line naming it.
 """
@@ -112,13 +113,36 @@ def points(sweeps: Sequence[Sweep]) -> list[dict[str, object]]:
     ]
 
 
-def check_points(mission_path: str | Path, sweeps: Sequence[Sweep], at_once: int = 1) -> None:
+def check_points(mission_path: str | Path, sweeps: Sequence[Sweep], at_once: int = 1) -> list[Sweep]:
     """Load the mission at every point (keys exist, values are valid), so a bad sweep fails before
     any run: `--sweep swarm.count: found -5, expected ...` (one line, naming the key); and refuse a
-    point whose `at_once` runs in parallel would not fit in memory (`swarm.sim.memory`)."""
-    from swarm.mission.load import load_mission
+    point whose `at_once` runs in parallel would not fit in memory (`swarm.sim.memory`).
+
+    Returns the sweeps with their values as the schema reads them, as it reads one `--set`: an
+    integer key swept over 8,10.0 is swept over 8 and 10 (the float went into the table, the
+    summary and the answer as 10.0)."""
+    from swarm.mission.load import load_mission, value_at
     from swarm.sim.memory import check_fits
 
+    read: dict[tuple[str, str], object] = {}
     for point in points(sweeps):
         mission = load_mission(mission_path, point, overrides_source="--sweep")
         check_fits(mission, at_once=at_once)
+        for key, value in point.items():
+            if (key, repr(value)) not in read:
+                read[key, repr(value)] = _as_read(value, value_at(mission, key))
+    typed = [Sweep(s.key, tuple(read[s.key, repr(v)] for v in s.values)) for s in sweeps]
+    for given, sweep in zip(sweeps, typed, strict=True):
+        if len(set(map(repr, sweep.values))) != len(sweep.values):
+            found = ",".join(map(str, given.values))
+            raise InputError("command line", f"--sweep {sweep.key}", found, "values without repeats")
+    return typed
+
+
+def _as_read(given: object, read: object) -> object:
+    """A swept value as the schema read it where only its type changed: an integer-valued float
+    an integer key took as an int. Anything else stays as written (a path or a list is its own
+    name in the table and in study.json, whatever the schema makes of it)."""
+    if isinstance(given, float) and isinstance(read, int) and not isinstance(read, bool) and read == given:
+        return read
+    return given

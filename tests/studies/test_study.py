@@ -299,6 +299,8 @@ def test_sweeps_parse_lists_and_ranges() -> None:
         ("swarm.count=1:5", "--sweep swarm.count"),
         ("swarm.count", "--sweep"),
         ("hazards.surf.wave_height_m=1,big", "hazards.surf.wave_height_m"),
+        ("swarm.count=2,3.5", "swarm.count: found 3.5, expected a whole number"),  # as --set says
+        ("swarm.count=3,3.0", "swarm.count: found '3,3.0', expected values without repeats"),
     ],
 )
 def test_a_bad_sweep_is_one_line_naming_the_key(tiny, tmp_path, sweep, names) -> None:
@@ -310,6 +312,22 @@ def test_a_bad_sweep_is_one_line_naming_the_key(tiny, tmp_path, sweep, names) ->
     lines = err.getvalue().strip().splitlines()
     assert len(lines) == 1 and names in lines[0] and "Traceback" not in err.getvalue()
     assert not out.exists()  # nothing written
+
+
+def test_an_integer_key_swept_with_a_whole_float_is_swept_over_integers(tiny, tmp_path) -> None:
+    """`--sweep swarm.count=2,3.0` swept the count over 2 and the float 3.0: a float column, 3.0
+    in study.json and summary.json. Each value is read as the schema reads one `--set`."""
+    out = tmp_path / "study"
+    with contextlib.redirect_stderr(io.StringIO()), contextlib.redirect_stdout(io.StringIO()):
+        code = main(["study", str(tiny), "--runs", "1", "--sweep", "swarm.count=2,3.0", "--workers", "1",
+                     "--out", str(out)])  # fmt: skip
+    assert code == 0
+    for name in ("study.json", "summary.json"):
+        counts = json.loads((out / name).read_text())["sweeps"]["swarm.count"]
+        assert counts == [2, 3] and all(type(c) is int for c in counts), name
+    params = [p["params"]["swarm.count"] for p in json.loads((out / "summary.json").read_text())["points"]]
+    assert all(type(c) is int for c in params)
+    assert pq.read_schema(out / "results.parquet").field("swarm.count").type == pa.int64()
 
 
 def test_a_bad_batch_is_one_line_and_a_good_one_runs_in_batches(tiny, tmp_path) -> None:
