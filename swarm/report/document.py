@@ -36,6 +36,13 @@ STATUSES = ("met", "not met", "none")
 MISSING = "-"
 
 
+def seconds(value: float) -> str:
+    """Whole seconds, as the reports print times, a half rounded up: the simulator's clock runs in
+    half seconds and a median of an even number of runs is often x.5, and format's half-to-even
+    printed 2746.5 as 2746 but 2747.5 as 2748."""
+    return str(math.floor(value + 0.5))
+
+
 def today() -> str:
     """Today's date (UTC), ISO: the date reports carry unless they are given one."""
     return datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%d")

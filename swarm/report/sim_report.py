@@ -20,7 +20,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 from swarm.report import sim_figures as figs
-from swarm.report.document import Figure, Report, Table, header
+from swarm.report.document import Figure, Report, Table, header, seconds
 from swarm.report.document import verdict as make_verdict
 from swarm.sim.layout import PHASES
 from swarm.sim.run import MissionLog
@@ -195,8 +195,8 @@ def run_table(data: dict) -> list[list[str]]:
     done = r["completed_s"]
     return [
         ["robots", str(r["robots"])],
-        ["mission time", f"{r['duration_s']:.0f} s ({r['duration_s'] / 60.0:.1f} min)"],
-        ["every criterion met at", "never" if done is None else f"{done:.0f} s"],
+        ["mission time", f"{seconds(r['duration_s'])} s ({r['duration_s'] / 60.0:.1f} min)"],
+        ["every criterion met at", "never" if done is None else f"{seconds(done)} s"],
         ["robots lost", str(r["lost"])],
     ]
 
@@ -205,7 +205,7 @@ def where_lost_table(data: dict) -> list[list[str]]:
     rows = [["robot", "cause", "phase", "time (s)", "x (m)", "y (m)"]]
     for x in sorted(data["losses"], key=lambda x: (x["t_s"], x["robot"])):
         rows.append(
-            [x["robot"], x["cause"], x["phase"], f"{x['t_s']:.0f}", f"{x['x_m']:.1f}", f"{x['y_m']:.1f}"]
+            [x["robot"], x["cause"], x["phase"], seconds(x["t_s"]), f"{x['x_m']:.1f}", f"{x['y_m']:.1f}"]
         )
     return rows
 
@@ -213,7 +213,7 @@ def where_lost_table(data: dict) -> list[list[str]]:
 def relay_table(data: dict) -> list[list[str]]:
     rows = [["from (s)", "to (s)", "source to sinks"]]
     rows += [
-        [f"{s['from_s']:.0f}", f"{s['to_s']:.0f}", "up" if s["up"] else "down"]
+        [seconds(s["from_s"]), seconds(s["to_s"]), "up" if s["up"] else "down"]
         for s in data["relay"]["spans"]
     ]
     return rows
@@ -221,7 +221,7 @@ def relay_table(data: dict) -> list[list[str]]:
 
 def phase_table(data: dict) -> list[list[str]]:
     rows = [["phase", "first robot in it at (s)", "until (s)"]]
-    rows += [[p["phase"], f"{p['start_s']:.0f}", f"{p['end_s']:.0f}"] for p in data["phases"]]
+    rows += [[p["phase"], seconds(p["start_s"]), seconds(p["end_s"])] for p in data["phases"]]
     return rows
 
 

@@ -20,7 +20,7 @@ from pathlib import Path
 import pyarrow as pa
 
 from swarm.report import study_figures as figs
-from swarm.report.document import Figure, Report, Table, Text, header, jsonable, verdict
+from swarm.report.document import Figure, Report, Table, Text, header, jsonable, seconds, verdict
 from swarm.report.study_figures import KEY_NOUNS, format_value, point_label, swept_keys
 from swarm.sim.hazards import CAUSE_DESCRIPTIONS, CAUSES
 from swarm.world.beachmap import BeachMap
@@ -52,10 +52,9 @@ def _fmt(value: object, spec: str) -> str:
 
 
 def _seconds(value: object) -> str:
-    """Whole seconds, as the project prints times, a half rounded up: a median of an even number
-    of runs is often x.5, and format's half-to-even printed 2746.5 as 2746 but 2747.5 as 2748."""
+    """`document.seconds`, MISSING without a number."""
     x = _number(value)
-    return MISSING if x is None else str(math.floor(x + 0.5))
+    return MISSING if x is None else seconds(x)
 
 
 def required_value_text(key: str, value: object) -> str:

@@ -4,6 +4,7 @@ and the position and heading errors over the run, per model."""
 from __future__ import annotations
 
 import io
+import math
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Protocol
@@ -50,7 +51,8 @@ def validation_figure(
     ax_path.plot(ref.x_m[0], ref.y_m[0], "D", color=SERIES["truth"], ms=6)
     for model, traj in trajectories.items():
         s = scores[model]
-        label = f"{model}: RMSE {s.path_rmse_m:.3f} m ({s.path_rmse_pct:.2f}%), final {s.final_error_m:.3f} m"
+        share = f"{s.path_rmse_pct:.2f}%" if math.isfinite(s.path_rmse_pct) else "n/a: no distance"
+        label = f"{model}: RMSE {s.path_rmse_m:.3f} m ({share}), final {s.final_error_m:.3f} m"
         ax_path.plot(
             traj.x_m, traj.y_m, LINESTYLES.get(model, "-"), color=SERIES.get(model), lw=1.4, label=label
         )

@@ -559,3 +559,15 @@ def test_a_simulation_without_outcome_json_is_not_a_plan(folders, tmp_path, kept
         detect(sim / kept[0])
     assert str(err.value) == message
     _refused(sim, message)
+
+
+def test_times_print_in_whole_seconds_a_half_rounded_up() -> None:
+    """The simulator's clock runs in half seconds: half-to-even printed 1026.5 as 1026 and
+    1027.5 as 1028 in the same table."""
+    from swarm.report.document import seconds
+    from swarm.report.sim_report import where_lost_table
+
+    assert [seconds(v) for v in (1026.5, 1027.5, 1026.49, 0.0)] == ["1027", "1028", "1026", "0"]
+    loss = {"robot": "robot_0", "cause": "failure", "phase": "beach", "x_m": 1.0, "y_m": 2.0}
+    rows = where_lost_table({"losses": [{**loss, "t_s": 1026.5}, {**loss, "t_s": 1027.5}]})
+    assert [r[3] for r in rows[1:]] == ["1027", "1028"]
