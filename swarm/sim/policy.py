@@ -4,7 +4,8 @@ work to the survivors that can hear about it.
 It drives the environment in command mode. Each step it:
 
 1. Reads the new events. A lost robot's work becomes an open *work item*: the rest of its search
-   track (in pieces of `TAKEOVER_PIECE_M`), its station (landing, relay, surveillance or beacon
+   track (from where it stood, or all of it when lost before the track; in pieces of
+   `TAKEOVER_PIECE_M`), its station (landing, relay, surveillance or beacon
    point; relays are how the chain heals; a landing zone only until it has held its robots, which
    is all its criterion asks), or the mine it was marking. A robot that found a mine
    makes a *mark* item.
