@@ -20,6 +20,7 @@ from PIL import Image
 from swarm.cli import main
 from swarm.errors import InputError
 from swarm.report import build_report
+from swarm.report.document import seconds
 from swarm.report.load import detect
 from swarm.report.sim_report import format_value
 
@@ -313,7 +314,7 @@ def test_simulation_numbers(parsed, folders):
     assert len(spans) - 1 == len(data["relay"]["spans"]) >= 1
     phases = md["Mission phases"]
     assert column(phases, "phase")[0] == "sea_transit"
-    assert column(phases, "first robot in it at (s)") == [f"{p['start_s']:.0f}" for p in data["phases"]]
+    assert column(phases, "first robot in it at (s)") == [seconds(p["start_s"]) for p in data["phases"]]
 
 
 def test_study_numbers(parsed, folders):
@@ -564,7 +565,6 @@ def test_a_simulation_without_outcome_json_is_not_a_plan(folders, tmp_path, kept
 def test_times_print_in_whole_seconds_a_half_rounded_up() -> None:
     """The simulator's clock runs in half seconds: half-to-even printed 1026.5 as 1026 and
     1027.5 as 1028 in the same table."""
-    from swarm.report.document import seconds
     from swarm.report.sim_report import where_lost_table
 
     assert [seconds(v) for v in (1026.5, 1027.5, 1026.49, 0.0)] == ["1027", "1028", "1026", "0"]
