@@ -317,9 +317,7 @@ def track_left(losses: dict[str, dict[str, float]], before: dict[str, float], on
     (`robot_losses`); `before`, `on`: the beach causes' probabilities on its way from the surf to
     its track and along the track. All of the track is left when it is lost at sea, in the surf or
     ashore before the track starts; 1 - `driven_share` of it when lost on the track; none when lost
-    after it. (mine_clear's searchers drive ~580 s ashore before their tracks start; counting every
-    loss ashore as half a track left put the plan's share at 0.50 where the simulation's searchers
-    leave 0.65.)"""
+    after it, in its slack (every loss ashore used to count as half a track left)."""
     by_phase = expected_by_cause(losses)
     early = sum(sum(by_phase[p].values()) for p in ("sea", "surf"))
     h_before, h_on = hazard(before), hazard(on)

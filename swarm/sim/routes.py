@@ -113,8 +113,10 @@ class Routes:
         leg's start) on. Taking the rest from the next waypoint dropped the leg the robot was on: a
         searcher of mine_clear lost on its first lane, 680 m long, left all of that lane to nobody."""
         cur, first, end = int(self.cursor[i]), int(self.sensing_from[i]), int(self.end[i])
-        if cur <= first or cur >= end:
-            return self.points[min(first, end) : end].copy()
+        if cur >= end:  # driven to its end (or no track)
+            return np.empty((0, 2))
+        if cur <= first:
+            return self.points[first:end].copy()
         head = self.points[cur - 1 : cur] if xy is None else np.asarray(xy, dtype=np.float64).reshape(1, 2)
         return np.vstack([head, self.points[cur:end]])
 

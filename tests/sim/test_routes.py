@@ -186,3 +186,23 @@ def test_the_length_left_is_numpys_sum_of_the_legs_float_for_float() -> None:
         a = rng.uniform(0.0, 10.0, size=n) * 10.0 ** rng.uniform(-3, 3)
         assert 0.0 + pairwise_sum(a, 0, n) == a.sum()
     assert len(routes.remaining_m(np.empty(0, np.intp), np.empty((0, 2)))) == 0
+
+
+def test_the_rest_of_a_track_is_all_of_it_then_from_where_the_robot_stands_then_nothing() -> None:
+    """A route to the track's first point (index 2) and along it: before the robot reaches the
+    track, all of the track; on it, from where it stands (or the leg's start) on; driven to its
+    end, nothing (a searcher lost after its track hands out no work)."""
+    routes = Routes(1)
+    pts = np.array([[0.0, 0.0], [5.0, 0.0], [10.0, 0.0], [10.0, 50.0], [12.0, 50.0], [12.0, 0.0]])
+    routes.set(0, pts, sensing_from=2)
+    here = np.array([10.0, 20.0])
+    for cursor in (0, 1, 2):  # on its way, then on the leg into the track's first point
+        routes.cursor[0] = cursor
+        np.testing.assert_array_equal(routes.remaining_track(0, here), pts[2:])
+    routes.cursor[0] = 3  # on the first lane, 20 m up it
+    np.testing.assert_array_equal(routes.remaining_track(0, here), np.vstack([here, pts[3:]]))
+    np.testing.assert_array_equal(routes.remaining_track(0), pts[2:])
+    routes.cursor[0] = len(pts)
+    assert routes.remaining_track(0, here).shape == (0, 2)
+    routes.set(0, pts[:2])  # a route with no track
+    assert routes.remaining_track(0, here).shape == (0, 2)
