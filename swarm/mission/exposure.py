@@ -97,16 +97,18 @@ def way_in(mission: Mission, cm: CostMap, rp: RobotPlan, heights, ashore, mine_a
     search = by_task.get(rp.task or "")
     end = search.design["window_s"][1] if search is not None else mission.beach_end_s
     land = np.vstack([p.reshape(-1, 2) for p in (rp.ground_m, rp.track_m)])
-    driven, inside = budget.driven_by_class(cm, land, mine_area)
+    # the ground route ends where the track starts (`drivable`): the land is the two, end to end
+    approach, approach_inside = budget.driven_by_class(cm, rp.ground_m, mine_area)
     track, track_inside = budget.driven_by_class(cm, rp.track_m, mine_area)
+    approach, track = _dry(mission, approach), _dry(mission, track)
     speed = search.design.get("speed_mps") if search is not None else None
     wet_m, wet_hit = budget.surf_crossing(mission, cm, rp.track_m, heights)
     exposure = budget.Exposure(
         sea_s=max(rp.sea_time_s - leg_surf_m / swim, 0.0),
         surf_s=surf_m / swim,
         beach_s=max(end - ashore_s, 0.0),
-        driven_m=_dry(mission, driven),
-        in_mine_area_m=inside,
+        driven_m=add_metres(approach, track),
+        in_mine_area_m=approach_inside + track_inside,
         breaker_hazard=per_hit,
         speed_mps=speed,
         beach_surf_s=wet_m / budget.ground_speed(mission, speed),
@@ -115,19 +117,14 @@ def way_in(mission: Mission, cm: CostMap, rp: RobotPlan, heights, ashore, mine_a
     last = (land if len(land) else on)[-1]
     before, on_track = None, None
     if len(rp.track_m):
-        approach, approach_inside = budget.driven_by_class(cm, rp.ground_m, mine_area)
-        approach = _dry(mission, approach)
         v = budget.ground_speed(mission, speed)
         before_s = min(sum(approach.values()) / v, exposure.beach_s)
-        track_s = min(sum(_dry(mission, track).values()) / v, exposure.beach_s - before_s)
+        track_s = min(sum(track.values()) / v, exposure.beach_s - before_s)
         before = budget.Exposure(0.0, 0.0, before_s, approach, approach_inside, speed_mps=speed)
         on_track = dataclasses.replace(
-            exposure, sea_s=0.0, surf_s=0.0, beach_s=track_s, driven_m=_dry(mission, track),
-            in_mine_area_m=track_inside,
-        )  # fmt: skip
-    return WayIn(
-        exposure, search, arrive, ashore_s, end, last, _dry(mission, track), track_inside, before, on_track
-    )
+            exposure, sea_s=0.0, surf_s=0.0, beach_s=track_s, driven_m=track, in_mine_area_m=track_inside
+        )
+    return WayIn(exposure, search, arrive, ashore_s, end, last, track, track_inside, before, on_track)
 
 
 def off_plan_driving(mission: Mission, cm: CostMap, plan: MissionPlan, ways: list[WayIn]) -> list:

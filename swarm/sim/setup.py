@@ -118,9 +118,9 @@ class MissionSetup:
         return np.asarray(per_class, np.float32)[self.beach.terrain.astype(np.intp)]
 
     def _initial_route(self, rp) -> tuple[np.ndarray, int | None]:
-        """A robot's planned waypoints (and where its search track starts: at the end of its
-        ground route, where the plan's `track_m` takes over after the first lane's start); spares
-        go on from their entry to wait on dry ground, out of the surf."""
+        """A robot's planned waypoints (and where its search track starts: the first lane's start,
+        where its ground route ends; the plan's `track_m` begins at that lane's end); spares go on
+        from their entry to wait on dry ground, out of the surf."""
         wp = rp.waypoints_m
         if rp.role == "spare":
             wp = np.vstack([wp, self.router.route(wp[-1], self.muster_point(wp[-1]))])

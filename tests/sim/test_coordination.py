@@ -37,6 +37,27 @@ def _run(env: SwarmEnv, policy: ScriptedPolicy, until_s: float) -> None:
         env.advance({})
 
 
+def _length(points: np.ndarray) -> float:
+    """A polyline's length."""
+    return float(np.hypot(*np.diff(points, axis=0).T).sum())
+
+
+def _searcher_and_spare(tmp_path) -> tuple[SwarmEnv, ScriptedPolicy]:
+    """One searcher and one spare on the quiet small beach, reset, under the scripted policy."""
+    search = {
+        "type": "search",
+        "area": "search_beach",
+        "sensor": {"model": "cookie_cutter", "sweep_width_m": 4.0},
+        "robots": 1,
+        "mark": False,
+    }
+    path = write_mission(tmp_path, swarm={"count": 2}, tasks=[search], hazards=QUIET)
+    env = SwarmEnv(load_mission(path), action_mode="command")
+    policy = ScriptedPolicy(env)
+    env.reset(seed=0)
+    return env, policy
+
+
 def test_random_failures_follow_the_exponential_survival_law(tmp_path) -> None:
     """MTBF 0.05 h (180 s), 600 robots released together: survivors after T = 150 s must match
     exp(-T / MTBF) within a 99.9% binomial interval."""
@@ -157,17 +178,7 @@ def test_a_landing_zone_that_has_held_its_robots_is_not_taken_over(tmp_path) -> 
 
 
 def test_a_lost_searchers_track_is_finished_by_a_spare(tmp_path) -> None:
-    search = {
-        "type": "search",
-        "area": "search_beach",
-        "sensor": {"model": "cookie_cutter", "sweep_width_m": 4.0},
-        "robots": 1,
-        "mark": False,
-    }
-    path = write_mission(tmp_path, swarm={"count": 2}, tasks=[search], hazards=QUIET)
-    env = SwarmEnv(load_mission(path), action_mode="command")
-    policy = ScriptedPolicy(env)
-    env.reset(seed=0)
+    env, policy = _searcher_and_spare(tmp_path)
     searcher = next(r for r in env.plan.robots if r.role == "search")
     i = env.agent_index[searcher.id]
     while not env.routes.in_track()[i]:
@@ -190,9 +201,7 @@ def test_a_lost_searchers_track_is_finished_by_a_spare(tmp_path) -> None:
     for v in won.waypoints_m[1:]:
         assert np.min(np.hypot(*(route - env.router.reachable(v)).T)) < 1e-9
     pieces = [it for it in policy.items if it.kind == "route"]
-    assert sum(np.hypot(*np.diff(it.waypoints_m, axis=0).T).sum() for it in pieces) == pytest.approx(
-        np.hypot(*np.diff(left, axis=0).T).sum()
-    )
+    assert sum(_length(it.waypoints_m) for it in pieces) == pytest.approx(_length(left))
     # the rest starts where the searcher stood, on the leg it was driving
     np.testing.assert_allclose(pieces[0].waypoints_m[0], xy)
 
@@ -201,17 +210,7 @@ def test_a_searcher_lost_before_its_track_leaves_all_of_it(tmp_path) -> None:
     """Its first lane too: the plan's `track_m` starts at that lane's end, where the ground
     route ends at its start (the rest was taken from the first track point on, and the first
     lane, 680 m on mine_clear, went to nobody)."""
-    search = {
-        "type": "search",
-        "area": "search_beach",
-        "sensor": {"model": "cookie_cutter", "sweep_width_m": 4.0},
-        "robots": 1,
-        "mark": False,
-    }
-    path = write_mission(tmp_path, swarm={"count": 2}, tasks=[search], hazards=QUIET)
-    env = SwarmEnv(load_mission(path), action_mode="command")
-    policy = ScriptedPolicy(env)
-    env.reset(seed=0)
+    env, policy = _searcher_and_spare(tmp_path)
     rp = next(r for r in env.plan.robots if r.role == "search")
     env.lose(rp.id)
     policy.update()
@@ -219,18 +218,16 @@ def test_a_searcher_lost_before_its_track_leaves_all_of_it(tmp_path) -> None:
     start = rp.ground_m[-1]
     assert not np.allclose(start, rp.track_m[0])  # the first lane joins them
     np.testing.assert_allclose(pieces[0][0], env.router.reachable(start))
-    laid = np.vstack([start, rp.track_m])
     # stitched around blocked ground: at least the laid length, never less
-    driven = sum(np.hypot(*np.diff(p, axis=0).T).sum() for p in pieces)
-    assert driven >= np.hypot(*np.diff(laid, axis=0).T).sum() - 1e-6
+    assert sum(_length(p) for p in pieces) >= _length(np.vstack([start, rp.track_m])) - 1e-6
 
 
 def test_split_polyline_pieces_join_up_and_keep_every_vertex() -> None:
     rng = np.random.default_rng(4)
     line = np.cumsum(rng.uniform(-20, 20, size=(40, 2)), axis=0)
     pieces = split_polyline(line, 50.0)
-    lengths = [float(np.hypot(*np.diff(p, axis=0).T).sum()) for p in pieces]
-    total = float(np.hypot(*np.diff(line, axis=0).T).sum())
+    lengths = [_length(p) for p in pieces]
+    total = _length(line)
     assert sum(lengths) == pytest.approx(total) and max(lengths) <= 50.0 + 1e-9
     assert len(pieces) == math.ceil(total / 50.0)
     for a, b in itertools.pairwise(pieces):
@@ -429,7 +426,7 @@ def test_a_retreat_from_the_standoff_leads_away_from_the_mines(mine_clear_env) -
     env.robot_state[i, :2] = (224.2, 139.0)
     policy._retreat(i, CLUSTER, safe_m)
     route = env.routes.points[env.routes.start[i] : env.routes.end[i]]
-    length = float(np.hypot(*np.diff(route, axis=0).T).sum())
+    length = _length(route)
     need = safe_m - float(np.min(np.hypot(*(CLUSTER - route[0]).T)))
     assert np.min(np.hypot(*(CLUSTER - route[-1]).T)) >= safe_m - 1e-6
     assert length <= 2.0 * need, (length, need, route[-1])
