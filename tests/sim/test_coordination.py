@@ -29,6 +29,14 @@ QUIET = {
 SHORT_RADIO = {"tx_power_dbm": 0.0, "rx_sensitivity_dbm": -70.0, "fade_margin_db": 3.0}
 SPARE = ROLES.index("spare")
 RELAY_TASK = {"type": "relay", "source": "relay_source", "sinks": ["relay_sink"], "radio": SHORT_RADIO}
+#: A search of the small beach by one robot with a 4 m cookie cutter, nothing to mark.
+ONE_SEARCHER = {
+    "type": "search",
+    "area": "search_beach",
+    "sensor": {"model": "cookie_cutter", "sweep_width_m": 4.0},
+    "robots": 1,
+    "mark": False,
+}
 
 
 def _run(env: SwarmEnv, policy: ScriptedPolicy, until_s: float) -> None:
@@ -44,14 +52,7 @@ def _length(points: np.ndarray) -> float:
 
 def _searcher_and_spare(tmp_path) -> tuple[SwarmEnv, ScriptedPolicy]:
     """One searcher and one spare on the quiet small beach, reset, under the scripted policy."""
-    search = {
-        "type": "search",
-        "area": "search_beach",
-        "sensor": {"model": "cookie_cutter", "sweep_width_m": 4.0},
-        "robots": 1,
-        "mark": False,
-    }
-    path = write_mission(tmp_path, swarm={"count": 2}, tasks=[search], hazards=QUIET)
+    path = write_mission(tmp_path, swarm={"count": 2}, tasks=[ONE_SEARCHER], hazards=QUIET)
     env = SwarmEnv(load_mission(path), action_mode="command")
     policy = ScriptedPolicy(env)
     env.reset(seed=0)
@@ -573,15 +574,8 @@ def test_a_lost_station_is_taken_over_before_the_pieces_of_a_lost_track(tmp_path
     a piece of a lost track is a sliver of the detection. So an idle robot goes to the station
     first, even when a piece of track is nearer (full_conops lost its lookout for 65 min while
     every spare finished tracks, and failed surveillance in 3 runs of 100)."""
-    search = {
-        "type": "search",
-        "area": "search_beach",
-        "sensor": {"model": "cookie_cutter", "sweep_width_m": 4.0},
-        "robots": 1,
-        "mark": False,
-    }
     lookout = {"type": "surveillance", "points": ["dune_lookout"], "dwell_s": 60.0}
-    path = write_mission(tmp_path, swarm={"count": 3}, tasks=[search, lookout], hazards=QUIET)
+    path = write_mission(tmp_path, swarm={"count": 3}, tasks=[ONE_SEARCHER, lookout], hazards=QUIET)
     env = SwarmEnv(load_mission(path), action_mode="command")
     policy = ScriptedPolicy(env)
     env.reset(seed=0)
@@ -610,15 +604,8 @@ def test_after_the_clearance_a_beacon_gets_its_stand_by_before_any_track_is_take
     """The stand-by at a beacon held at the end is a hedge on a whole criterion: it comes before
     the lost tracks (full_conops failed its beacon in 4 runs of 100 because every idle robot went
     on searching after the clearance and none stood by)."""
-    search = {
-        "type": "search",
-        "area": "search_beach",
-        "sensor": {"model": "cookie_cutter", "sweep_width_m": 4.0},
-        "robots": 1,
-        "mark": False,
-    }
     beacon = {"type": "beacon", "points": [[55.0, 52.0]], "robots_per_point": 1}
-    path = write_mission(tmp_path, swarm={"count": 3}, tasks=[search, beacon], hazards=QUIET)
+    path = write_mission(tmp_path, swarm={"count": 3}, tasks=[ONE_SEARCHER, beacon], hazards=QUIET)
     env = SwarmEnv(load_mission(path), action_mode="command")
     policy = ScriptedPolicy(env)
     env.reset(seed=0)
@@ -670,15 +657,8 @@ def test_a_late_loss_at_one_beacon_does_not_pull_the_stand_by_off_the_other(tmp_
     end-held point is never sent to another (full_conops swapped two stand-bys 40 m apart 40 s
     before the end, and neither got there)."""
     points = [[55.0, 52.0], [75.0, 52.0]]
-    search = {
-        "type": "search",
-        "area": "search_beach",
-        "sensor": {"model": "cookie_cutter", "sweep_width_m": 4.0},
-        "robots": 1,
-        "mark": False,
-    }
     beacon = {"type": "beacon", "points": points, "robots_per_point": 1}
-    path = write_mission(tmp_path, swarm={"count": 5}, tasks=[search, beacon], hazards=QUIET)
+    path = write_mission(tmp_path, swarm={"count": 5}, tasks=[ONE_SEARCHER, beacon], hazards=QUIET)
     env = SwarmEnv(load_mission(path), action_mode="command")
     policy = ScriptedPolicy(env)
     env.reset(seed=0)
