@@ -143,6 +143,9 @@ class ScriptedPolicy:
         self._seen = 0
         self._next_alloc_s = 0.0
         self._held: dict[int, tuple[np.ndarray, bool]] = {}
+        #: robot -> the piece of track it took over last: the only one of its pieces that a loss
+        #: can leave unfinished (a robot takes work only once it has finished its route)
+        self._doing: dict[int, WorkItem] = {}
         self._waiting: dict[int, np.ndarray] = {}  # stand-by waiting out a clearance -> its point
         self._clearance_state = "before"
         self._gave_up: set[tuple[int, int]] = set()  # (robot, object): marks given up as too far
@@ -240,14 +243,16 @@ class ScriptedPolicy:
         t = env.t_s
         self._news = True
         reopened = False
+        doing = self._doing.pop(i, None)
         for it in self.items:  # work it had taken over from others is open again
             if it.taken_by != i:
                 continue
+            if it.track:  # a piece of track: only the one it is on, and only what is left of it
+                rest = self._rest_of_piece(i, it) if it is doing else np.empty((0, 2))
+                if not len(rest):
+                    continue  # driven to its end: done
+                it.start_m, it.waypoints_m = rest[0].copy(), rest
             it.taken_by, it.audience, reopened = -1, audience.copy(), True
-            if it.track:
-                rest = env.routes.remaining_track(i, env.robot_state[i, :2])
-                if len(rest):
-                    it.start_m, it.waypoints_m = rest[0].copy(), rest
         k = int(env.marking[i])
         if k >= 0:
             if not any(it.kind == "mark" and it.obj == k for it in self.items):
@@ -268,6 +273,21 @@ class ScriptedPolicy:
             for piece in split_polyline(rest, TAKEOVER_PIECE_M):
                 self.items.append(WorkItem("route", "search", piece[0].copy(), piece, track=True,
                                            audience=audience, created_s=t))  # fmt: skip
+
+    def _rest_of_piece(self, i: int, it: WorkItem) -> np.ndarray:
+        """What is left of the piece of track `it` that robot i took over: all of it before the
+        robot gets there, then from where it stands, nothing once driven to its end. While the
+        robot waits out a clearance, of the route it will resume (`_held`: its rest of route when
+        it was on the track; else one point where it had finished, the way there and the piece
+        where it had not)."""
+        held = self._held.get(i)
+        if held is None:
+            env = self.env
+            return env.routes.remaining_track(i, env.robot_state[i, :2])
+        rest, on_track = held
+        if on_track:
+            return rest
+        return it.waypoints_m if len(rest) > 1 else np.empty((0, 2))
 
     def _station_of(self, i: int) -> np.ndarray:
         """Where robot i's station is: the end of its route, or, while it is away for the
@@ -537,6 +557,10 @@ class ScriptedPolicy:
         env = self.env
         it.taken_by = i
         self._waiting.pop(i, None)
+        if it.track:
+            self._doing[i] = it
+        else:
+            self._doing.pop(i, None)
         env.log_event("takeover", i, item=it.kind, role=it.role, obj=it.obj)
         if it.kind == "mark":
             env.set_command(i, MARK, env.objects_m[it.obj])

@@ -41,6 +41,9 @@ class Routes:
         self.end = np.zeros(n, dtype=np.intp)
         self.cursor = np.zeros(n, dtype=np.intp)
         self.sensing_from = np.zeros(n, dtype=np.intp)  # the first point of a searcher's track
+        #: the robot was on its track when it was given this route (`steer_clear`): the leg to the
+        #: route's first point is track too
+        self.joined = np.zeros(n, dtype=bool)
 
     def set(self, i: int, waypoints: np.ndarray, sensing_from: int | None = None) -> None:
         """Give robot i a new route (k, 2); `sensing_from`: index of the first search-track point."""
@@ -55,6 +58,7 @@ class Routes:
         self.points = self._store[: self._used]
         self.start[i], self.end[i], self.cursor[i] = base, base + len(pts), base
         self.sensing_from[i] = base + (len(pts) if sensing_from is None else sensing_from)
+        self.joined[i] = False
 
     def steer_clear(self, i: int, xy: np.ndarray, avoid: np.ndarray, radius_m: float) -> None:
         """Re-lay what is left of robot i's route (from where it stands) clear of `avoid` (`clear_of`),
@@ -72,6 +76,7 @@ class Routes:
             self.set(i, new[1:])
         else:
             self.set(i, new[1:], sensing_from=0 if track <= 0 else int(where[track + 1]) - 1)
+            self.joined[i] = track < 0  # on the track, driving a leg of it
 
     def may_pass(self, robots: np.ndarray, xy: np.ndarray, point: np.ndarray, radius_m: float) -> np.ndarray:
         """Those of `robots` (standing at `xy`) whose rest of route might pass within `radius_m` of
@@ -111,14 +116,17 @@ class Routes:
         """What is left of robot i's search track `points[sensing_from:end]`: all of it until the
         robot is on it, then from where it stands on the leg it drives (`xy`; without it, from the
         leg's start) on. Taking the rest from the next waypoint dropped the leg the robot was on: a
-        searcher of mine_clear lost on its first lane, 680 m long, left all of that lane to nobody."""
+        searcher of mine_clear lost on its first lane, 680 m long, left all of that lane to nobody;
+        so did one lost on its way to a side-step (`joined`)."""
         cur, first, end = int(self.cursor[i]), int(self.sensing_from[i]), int(self.end[i])
         if cur >= end:  # driven to its end (or no track)
             return np.empty((0, 2))
-        if cur <= first:
+        on_first_leg = self.joined[i] and cur == first
+        if cur <= first and not on_first_leg:
             return self.points[first:end].copy()
-        head = self.points[cur - 1 : cur] if xy is None else np.asarray(xy, dtype=np.float64).reshape(1, 2)
-        return np.vstack([head, self.points[cur:end]])
+        if xy is None:
+            return self.points[cur if on_first_leg else cur - 1 : end].copy()
+        return np.vstack([np.asarray(xy, dtype=np.float64).reshape(1, 2), self.points[cur:end]])
 
     def remaining_m(self, robots: np.ndarray, xy: np.ndarray) -> np.ndarray:
         """(k,) how far each of `robots` (standing at `xy` (k, 2)) has still to drive along its
@@ -186,6 +194,7 @@ class RoutesView:
         s = slice(offset, offset + n)
         self.start, self.end = routes.start[s], routes.end[s]
         self.cursor, self.sensing_from = routes.cursor[s], routes.sensing_from[s]
+        self.joined = routes.joined[s]
 
     @property
     def points(self) -> np.ndarray:

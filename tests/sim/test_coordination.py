@@ -223,6 +223,34 @@ def test_a_searcher_lost_before_its_track_leaves_all_of_it(tmp_path) -> None:
     assert sum(_length(p) for p in pieces) >= _length(np.vstack([start, rp.track_m])) - 1e-6
 
 
+def test_a_lost_taker_hands_on_the_rest_of_its_piece_and_not_the_pieces_it_finished(tmp_path) -> None:
+    """Its finished pieces stay done (every piece it had ever taken used to open again: each one
+    given the rest of the piece it was on, or all of it again when it was idle, so the swarm drove
+    lost tracks twice)."""
+    env, policy = _searcher_and_spare(tmp_path)
+    searcher = next(r for r in env.plan.robots if r.role == "search")
+    env.lose(searcher.id)
+    policy.update()
+    first, second = [it for it in policy.items if it.track]  # two pieces of about 250 m
+    j = next(k for k in range(env.n) if env.alive[k])
+    while second.taken_by != j or not env.routes.in_track()[j]:
+        policy.update()
+        env.advance({})
+    assert first.taken_by == j  # it drove the first piece to its end, then took the second
+    _run(env, policy, env.t_s + 20.0)
+    done = first.waypoints_m.copy()
+    xy = env.robot_state[j, :2].copy()
+    rest = env.routes.remaining_track(j, xy)
+    env.lose(env.possible_agents[j])
+    policy.update()
+    assert first.taken_by == j
+    np.testing.assert_array_equal(first.waypoints_m, done)
+    assert second.taken_by == -1
+    np.testing.assert_allclose(second.waypoints_m[0], xy)
+    assert _length(second.waypoints_m) == pytest.approx(_length(rest))
+    assert _length(rest) < _length(first.waypoints_m)  # not all of it: the spare had driven some
+
+
 def test_split_polyline_pieces_join_up_and_keep_every_vertex() -> None:
     rng = np.random.default_rng(4)
     line = np.cumsum(rng.uniform(-20, 20, size=(40, 2)), axis=0)

@@ -206,3 +206,30 @@ def test_the_rest_of_a_track_is_all_of_it_then_from_where_the_robot_stands_then_
     assert routes.remaining_track(0, here).shape == (0, 2)
     routes.set(0, pts[:2])  # a route with no track
     assert routes.remaining_track(0, here).shape == (0, 2)
+
+
+def test_a_searcher_side_stepping_on_its_track_leaves_the_leg_to_the_side_step() -> None:
+    """20 m up its first lane a searcher side-steps a mine 40 m up: the re-laid route starts at the
+    side-step, and the rest of its track still starts where it stands (it used to start at the
+    side-step, and a searcher lost before it left those metres of lane to nobody). On its way to
+    the lane, the track still starts at the lane's first point."""
+    pts = np.array([[0.0, 0.0], [10.0, 0.0], [10.0, 100.0], [12.0, 100.0]])
+    here, mine = np.array([10.0, 20.0]), np.array([[10.5, 40.0]])
+    routes = Routes(1)
+    routes.set(0, pts, sensing_from=1)
+    routes.cursor[0] = 2  # on the lane
+    whole = routes.remaining_track(0, here)
+    routes.steer_clear(0, here, mine, 3.0)
+    rest = routes.remaining_track(0, here)
+    np.testing.assert_array_equal(rest[0], here)
+    assert len(rest) == len(whole) + 2  # the two side-step points
+    np.testing.assert_array_equal(rest[-2:], pts[-2:])
+    np.testing.assert_array_equal(routes.remaining_track(0), rest[1:])  # from the side-step on
+    routes.cursor[0] += 1  # past the first side-step point: from where it stands, as on any leg
+    np.testing.assert_array_equal(routes.remaining_track(0, here)[1:], rest[2:])
+    routes.set(0, pts, sensing_from=1)  # on its way to the lane
+    routes.steer_clear(0, np.array([5.0, 0.0]), np.array([[7.0, 0.5]]), 1.0)
+    track = routes.remaining_track(0, here)
+    np.testing.assert_array_equal(track[0], pts[1])
+    np.testing.assert_array_equal(track[-1], pts[-1])
+    assert len(track) == len(pts) - 1
