@@ -8,7 +8,8 @@ It drives the environment in command mode. Each step it:
    `TAKEOVER_PIECE_M`), its station (landing, relay, surveillance or beacon
    point; relays are how the chain heals; a landing zone only until it has held its robots, which
    is all its criterion asks), or the mine it was marking. A robot that found a mine
-   makes a *mark* item.
+   makes a *mark* item. A lost robot that had taken work over hands on what it left of it: the
+   station or mark, or the rest of the piece of track it was on; the pieces it finished stay done.
 2. Spreads the news over the radio: an item is known first to the robots in the lost (or finding)
    robot's radio component at the time, then to every component that contains a robot that knows
    it, as links come and go. Jammed or isolated robots learn nothing.
