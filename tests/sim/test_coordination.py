@@ -658,14 +658,7 @@ def test_a_beacon_gets_its_stand_by_before_a_late_clearance_when_no_found_mine_i
     """In the last `STAND_BY_LEAD_S` the stand-by does not wait for a pending clearance when the
     beacon is clear of every mine found: waiting left full_conops's stand-bys 440 m away, still
     driving, when a beacon robot failed 50 s before the end."""
-    search = {
-        "type": "search",
-        "area": "search_beach",
-        "sensor": {"model": "cookie_cutter", "sweep_width_m": 4.0},
-        "robots": 1,
-        "mark": True,
-        "clearance": {"at_s": 550.0, "standoff_m": 10.0},
-    }
+    search = {**ONE_SEARCHER, "mark": True, "clearance": {"at_s": 550.0, "standoff_m": 10.0}}
     beacon = {"type": "beacon", "points": [[55.0, 52.0]], "robots_per_point": 1}
     hazards = {**QUIET, "mines": {"count": 0}}
     path = write_mission(tmp_path, swarm={"count": 3}, tasks=[search, beacon], hazards=hazards)
