@@ -139,10 +139,12 @@ class Routes:
         return out
 
     def in_track(self) -> np.ndarray:
-        """(n,) True while the robot is on the search-track part of its route."""
-        return (
-            (self.cursor >= self.sensing_from) & (self.cursor < self.end) & (self.sensing_from > self.start)
-        )
+        """(n,) True while the robot is on the search-track part of its route (its way to the
+        track's first point included; a route without a track has `sensing_from` at its end). A
+        route whose track starts at its first point counts too: a taker sent to a piece that starts
+        where it stands used to count as off its track, and the route it resumed after a
+        clearance as having none."""
+        return (self.cursor >= self.sensing_from) & (self.cursor < self.end)
 
     def advance(self, xy: np.ndarray, mask: np.ndarray) -> None:
         """Move the cursors of robots in `mask` past every waypoint they have reached (a few at
@@ -222,9 +224,7 @@ class RoutesView:
         return self.base.remaining_m(np.asarray(robots, dtype=np.intp) + self.offset, xy)
 
     def in_track(self) -> np.ndarray:
-        return (
-            (self.cursor >= self.sensing_from) & (self.cursor < self.end) & (self.sensing_from > self.start)
-        )
+        return (self.cursor >= self.sensing_from) & (self.cursor < self.end)
 
 
 def clear_of(points: np.ndarray, avoid: np.ndarray, radius_m: float) -> tuple[np.ndarray, np.ndarray]:

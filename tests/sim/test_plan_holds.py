@@ -35,6 +35,18 @@ def _driven_swath(log, area, width_m: float) -> float:
     return float(swath.intersection(area).area / area.area)
 
 
+def _found_on_planned_routes(log) -> int:
+    """Mines detected by robots that had not yet taken up any work (a `takeover` event)."""
+    working: set[str] = set()
+    count = 0
+    for ev in log.events:
+        if ev["kind"] == "takeover":
+            working.add(ev["robot"])
+        elif ev["kind"] == "detection" and ev["robot"] not in working:
+            count += 1
+    return count
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("name", ["mine_clear", "full_conops"])
 def test_with_no_hazards_the_simulation_finds_what_the_plan_expects(name: str) -> None:
@@ -42,28 +54,33 @@ def test_with_no_hazards_the_simulation_finds_what_the_plan_expects(name: str) -
     lateral-range curve, beside landing, relay and surveillance. The plan is the shipped mission's
     own; ten runs (one batch) take every hazard off and lay 200 mines each, for a +-1% interval.
 
-    What the swarm finds must match the plan's expected detection (its Wilson interval holds it).
-    The whole swarm, not the searchers alone: a pass is decided as a robot closes on a mine, so a
-    lander or a stand-by that comes near a mine first finds one the searchers' tracks would have
-    found too; and the searchers sweep the ground the plan swept."""
+    What the robots find on the routes the plan laid (every robot, before it takes up any work:
+    a lander or a stand-by that comes near a mine first finds one the searchers' tracks would have
+    found too) must match the plan's expected detection (its Wilson interval holds it), and the
+    searchers sweep the ground the plan swept. Work the plan does not lay (a trip to mark a mine
+    found) sweeps more ground: with it the swarm finds at least what the plan expects. Counting the
+    whole swarm against the plan once passed a policy whose searchers' tracks found 91.2% of the
+    mines (the plan's 93.1%), its marking trips making up the rest."""
     plan_for = load_mission(MISSIONS / f"{name}.yaml")
     plan = plan_mission(plan_for, seed=plan_for.seed, workers=1)
     mission = load_mission(MISSIONS / f"{name}.yaml", NO_HAZARDS)
     (search,) = plan.search
     area = mission.beach_map.regions["search_beach"].geometry
-    found = total = 0
+    on_routes = found = total = 0
     for log in simulate_batch(mission, range(1, 11), plan=plan):
         assert not log.losses
         found += int(np.sum(log.mines_state["detected"]))
+        on_routes += _found_on_planned_routes(log)
         total += len(log.mines_m)
         driven = _driven_swath(log, area, search.sweep_width_m)
         planned = shapely.union_all(
             [t.buffer(search.sweep_width_m / 2) for run in search.tracks for t in run]
         )
         assert driven >= 0.95 * planned.intersection(area).area / area.area
-    low, high = wilson_interval(found, total, 0.95)
+    low, high = wilson_interval(on_routes, total, 0.95)
     assert high - low <= 0.025  # enough mines for a +-1% interval
-    assert low <= search.expected_detection <= high, (found, total, search.expected_detection)
+    assert low <= search.expected_detection <= high, (on_routes, total, search.expected_detection)
+    assert search.expected_detection <= wilson_interval(found, total, 0.95)[1], (found, total)
 
 
 @pytest.mark.slow

@@ -233,3 +233,17 @@ def test_a_searcher_side_stepping_on_its_track_leaves_the_leg_to_the_side_step()
     np.testing.assert_array_equal(track[0], pts[1])
     np.testing.assert_array_equal(track[-1], pts[-1])
     assert len(track) == len(pts) - 1
+
+
+def test_a_route_whose_track_starts_at_its_first_point_is_on_its_track() -> None:
+    """A taker sent to a piece of track that starts where it stands gets such a route; until it is
+    driven to its end the robot is on its track. A route without a track never is."""
+    routes = Routes(2)
+    pts = np.array([[0.0, 0.0], [0.0, 50.0], [2.0, 50.0]])
+    routes.set(0, pts, sensing_from=0)
+    routes.set(1, pts)
+    for cursor in range(len(pts)):
+        routes.cursor[:] = routes.start + cursor
+        np.testing.assert_array_equal(routes.in_track(), [True, False])
+    routes.cursor[:] = routes.end
+    np.testing.assert_array_equal(routes.in_track(), [False, False])
