@@ -59,8 +59,8 @@ def test_with_no_hazards_the_simulation_finds_what_the_plan_expects(name: str) -
     found too) must match the plan's expected detection (its Wilson interval holds it), and the
     searchers sweep the ground the plan swept. Work the plan does not lay (a trip to mark a mine
     found) sweeps more ground: with it the swarm finds at least what the plan expects. Counting the
-    whole swarm against the plan once passed a policy whose searchers' tracks found 91.2% of the
-    mines (the plan's 93.1%), its marking trips making up the rest."""
+    whole swarm against the plan once passed a policy whose robots found 91.2% of mine_clear's mines
+    on the plan's routes (the plan's 93.1%), its marking trips making up the rest."""
     plan_for = load_mission(MISSIONS / f"{name}.yaml")
     plan = plan_mission(plan_for, seed=plan_for.seed, workers=1)
     mission = load_mission(MISSIONS / f"{name}.yaml", NO_HAZARDS)
