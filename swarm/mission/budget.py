@@ -15,7 +15,8 @@ rates the simulator draws from (`swarm.sim.hazards`):
   tracks' surf-zone metres at the search speed;
 - immobilization: per_km x mode factor x (1 + (slip / 0.3)^2) per metre on each class, with each
   mode's steady slip at cruise (the cost map's mode speeds);
-- rock: damage_per_km per metre on rock;
+- rock: damage_per_km per metre on rock, and hidden rocks met per metre on land (hidden_per_ha x
+  twice the contact radius, as mines) x collision_damage_probability;
 - mine: mines met per metre (density x twice the trigger radius) x the chance the sensor has not
   found the mine while the robot can still keep off it x trigger_probability. Inverse cube:
   exp(-W^2 / (16 pi d^2)) for a mine dead ahead, at d = the trigger radius + one simulator step
@@ -82,6 +83,8 @@ RETURN_PHASE = "return"
 TAKEOVER_PIECE_M = 300.0
 #: The simulator's trigger radius (`swarm.sim.mines.DEFAULT_TRIGGER_RADIUS_M`, m).
 TRIGGER_RADIUS_M = 0.25
+#: The simulator's hidden-rock contact radius (`swarm.sim.hazards.ROCK_CONTACT_M`, m).
+ROCK_CONTACT_M = 0.25
 #: The simulator's step (`swarm.sim.env.SimConfig.dt_s`, s): the scripted policy steers clear of a
 #: mine the step after its sensor finds it, so a robot closing on a mine drives one step further.
 REACTION_S = 0.5
@@ -257,12 +260,15 @@ def robot_losses(mission: Mission, cm: CostMap, exposure: Exposure) -> dict[str,
     lib = mission.terrain_library
     stuck = 0.0
     rock = 0.0
+    # hidden rocks lie on every passable land cell (`swarm.sim.hazards.hidden_rocks_in_cells`)
+    hidden_per_m = hz.rocks.hidden_per_ha / 1e4 * 2 * ROCK_CONTACT_M * hz.rocks.collision_damage_probability
     for cls, metres in exposure.driven_m.items():
         if lib[cls].is_water:
             continue
         s = min(max(slip.get(cls, 0.0), 0.0), 1.0)
         factor = hz.immobilization.mode_factors.get(cls, 1.0) * (1.0 + (s / SLIP_SCALE) ** 2)
         stuck += hz.immobilization.per_km / 1000.0 * factor * metres
+        rock += hidden_per_m * metres
         if cls == "rock":
             rock += hz.rocks.damage_per_km / 1000.0 * metres
     out["beach"]["immobilized"] = -math.expm1(-stuck)
