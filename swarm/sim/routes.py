@@ -196,7 +196,6 @@ class RoutesView:
         s = slice(offset, offset + n)
         self.start, self.end = routes.start[s], routes.end[s]
         self.cursor, self.sensing_from = routes.cursor[s], routes.sensing_from[s]
-        self.joined = routes.joined[s]
 
     @property
     def points(self) -> np.ndarray:
@@ -211,8 +210,9 @@ class RoutesView:
     def clear(self, i: int) -> None:
         self.base.clear(self.offset + i)
 
-    def done(self) -> np.ndarray:
-        return self.cursor >= self.end
+    # the whole-array predicates read only the view's own cursor, sensing_from and end
+    done = Routes.done
+    in_track = Routes.in_track
 
     def remaining(self, i: int) -> np.ndarray:
         return self.base.remaining(self.offset + i)
@@ -222,9 +222,6 @@ class RoutesView:
 
     def remaining_m(self, robots: np.ndarray, xy: np.ndarray) -> np.ndarray:
         return self.base.remaining_m(np.asarray(robots, dtype=np.intp) + self.offset, xy)
-
-    def in_track(self) -> np.ndarray:
-        return (self.cursor >= self.sensing_from) & (self.cursor < self.end)
 
 
 def clear_of(points: np.ndarray, avoid: np.ndarray, radius_m: float) -> tuple[np.ndarray, np.ndarray]:
