@@ -788,6 +788,11 @@ def _cmd_plan(args: argparse.Namespace) -> int:
                 said.append(
                     f"{evaluation['lost']['mean']:.1f} robots lost a run (plan {plan.expected_lost:.1f})"
                 )
+            if evaluation.get("recovered") and plan.expected_recovered is not None:
+                low, high = plan.expected_recovered
+                said.append(
+                    f"{evaluation['recovered']['mean']:.1f} back at sea (plan {low:.1f} to {high:.1f})"
+                )
             if evaluation.get("suggested_count"):
                 said.append(f"suggested size {evaluation['suggested_count']}")
             if evaluation.get("runs_needed"):

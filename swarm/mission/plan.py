@@ -172,6 +172,14 @@ class MissionPlan:
         return float(self.budget["expected_lost"]) if self.budget.get("hazards") else None
 
     @property
+    def expected_recovered(self) -> tuple[float, float] | None:
+        """Robots the plan expects back at sea (`budget`), at least and at most: the survivors
+        less the markers the clearance expends (all the team can spare, or its reserves alone)
+        and the losses on the way; None without a return to sea."""
+        value = self.budget.get("expected_recovered")
+        return None if value is None else (float(value[0]), float(value[1]))
+
+    @property
     def expected_coverage(self) -> float | None:
         """Area-weighted expected detection fraction over the search tasks (None without search)."""
         if not self.search:
@@ -833,11 +841,13 @@ def _budget(mission: Mission, plan: MissionPlan) -> dict:
     per_phase: dict[str, dict[str, float]] = {p: {} for p in budget.PHASE_NAMES}
     back = mission.phases.return_to_sea
     way_back: dict[str, float] = {}
-    returning = 0.0  # robots expected to set off back to sea
+    returning = 0.0  # robots expected to last the beach: who sets off back, but for the markers
     if back.enabled:
         places = back.points or [tuple(rp.launch_m) for rp in plan.robots]
         pickups = np.unique(np.array([place_xy(plan.beach_map, p) for p in places], np.float64), axis=0)
     lost_by_task: dict[str, float] = {}
+    lasting: dict[str, float] = {}  # each search team's robots expected to last beach operations
+    reserves_lasting: dict[str, float] = {}  # the same of its reserves alone
     orphaned_s: dict[str, float] = {}  # search time lost searchers leave undone
     spare_s: dict[str, float] = {}  # time the others have for it: reserves, searchers done early
     unseen_blasts = 0.0  # mines expected to go off before any sensor found them
@@ -860,8 +870,8 @@ def _budget(mission: Mission, plan: MissionPlan) -> dict:
         for phase, causes in expected.items():
             for cause, p in causes.items():
                 per_phase[phase][cause] = per_phase[phase].get(cause, 0.0) + p
+        still = 1.0 - budget.lost_probability(whole)
         if back.enabled:
-            still = 1.0 - budget.lost_probability(whole)
             returning += still
             home = exposure.way_back(mission, cm, way.last_m, pickups, heights)
             for cause, p in budget.return_losses(mission, cm, home).items():
@@ -871,6 +881,9 @@ def _budget(mission: Mission, plan: MissionPlan) -> dict:
             lost = budget.lost_probability(losses)
             task = way.search.task
             lost_by_task[task] = lost_by_task.get(task, 0.0) + lost
+            lasting[task] = lasting.get(task, 0.0) + still
+            if rp.role != "search":
+                reserves_lasting[task] = reserves_lasting.get(task, 0.0) + still
             span = max(way.window_end_s - way.arrive_s, 0.0)
             run_s = way.search.design["search_time_s"]
             if rp.role == "search":  # its track left undone if it is lost, its slack if it is not
@@ -881,7 +894,7 @@ def _budget(mission: Mission, plan: MissionPlan) -> dict:
                 spare_s[task] = spare_s.get(task, 0.0) + span * (1.0 - lost / 2.0)
     criterion = mission.success.min_detection_fraction
     searches = {}
-    markers = 0.0
+    markers = [0.0, 0.0]  # robots the clearances expend: at least, at most
     for s in plan.search:
         # every robot's sensor is on ashore: the planned routes of landers, spares and observers
         # across the mine area count too (what robots drive off the plan, parking or taking
@@ -917,9 +930,12 @@ def _budget(mission: Mission, plan: MissionPlan) -> dict:
         after_losses = budget.p_criterion_met(criterion, mines, after, poisson=random_count)
         s.design["p_criterion_met"] = as_planned
         if task.mark and task.clearance is not None:
-            # the reserves mark the mines found (a searcher never leaves its track to), and the
-            # clearance expends its markers
-            markers += min(mines * after, s.design["reserves"])
+            # a robot of the team marks each mine found and the clearance expends it: a reserve
+            # that lasts, surely; a searcher only once its track and the lost tracks it can take
+            # are done (`swarm.sim.policy`), so at most every robot of the team that lasts
+            found = mines * after
+            markers[0] += min(found, reserves_lasting.get(s.task, 0.0))
+            markers[1] += min(found, lasting.get(s.task, 0.0))
         searches[s.task] = {
             "criterion": criterion,
             "expected_detection": s.expected_detection,
@@ -929,15 +945,22 @@ def _budget(mission: Mission, plan: MissionPlan) -> dict:
             "expected_team_losses": lost_by_task.get(s.task, 0.0),
             "reserves": s.design["reserves"],
         }
+    recovered = None
     if back.enabled and returning > 0:
-        # the markers the clearance expends do not go back
-        share = max(returning - markers, 0.0) / returning
-        per_phase[budget.RETURN_PHASE] = {c: v * share for c, v in way_back.items()}
+        # the markers the clearance expends do not go back: back at sea as few as when every
+        # robot of the team that lasts marks a mine, as many as when only the reserves do, and the
+        # losses on the way (a robot each, at the same rate) those of the most that set off
+        per_returner = sum(way_back.values()) / returning
+        setting_off = [max(returning - m, 0.0) for m in reversed(markers)]
+        per_phase[budget.RETURN_PHASE] = {c: v * setting_off[1] / returning for c, v in way_back.items()}
+        recovered = [n * (1.0 - per_returner) for n in setting_off]
     total = sum(sum(c.values()) for c in per_phase.values())
     return {
         "hazards": budget.hazards_enabled(mission),
         "expected_losses": {p: dict(sorted(c.items())) for p, c in per_phase.items()},
         "expected_lost": total,
+        "expected_expended": markers,
+        "expected_recovered": recovered,
         "search": searches,
     }
 

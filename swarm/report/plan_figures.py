@@ -9,6 +9,7 @@ cividis (readable with any colour vision, and in greyscale). Robots by role also
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
 import numpy as np
@@ -275,8 +276,12 @@ def arrival_png(robots: Sequence[dict]) -> bytes | None:
     return png_bytes(fig)
 
 
-def evaluation_png(evaluation: dict, criterion: float | None, expected: list[float]) -> bytes:
-    """Histograms of the detected fraction and of the robots lost, over the plan's simulated runs."""
+def evaluation_png(
+    evaluation: dict, criterion: float | None, expected: list[float], expected_lost: float | None = None
+) -> bytes:
+    """Histograms of the detected fraction and of the robots lost over the plan's simulated runs,
+    each with what the plan expects of a run with its losses (`expected`: each search's detection
+    after losses; `expected_lost`: None with the hazards off)."""
     det = evaluation.get("detection_values") or []
     if det:
         fig, (left, right) = new_figure(7.2, 2.8, ncols=2)
@@ -293,8 +298,11 @@ def evaluation_png(evaluation: dict, criterion: float | None, expected: list[flo
         left.set_ylabel("runs")
     lost = evaluation.get("lost_values") or []
     if lost:
-        top = max(lost)
+        top = max(max(lost), math.ceil(expected_lost or 0))
         right.hist(lost, bins=np.arange(-0.5, top + 1.5, 1.0), color=ROLE_COLOURS["spare"], alpha=0.8)
+    if expected_lost is not None:
+        right.axvline(expected_lost, color="black", lw=1.2, label=f"plan {expected_lost:.1f}")
+        right.legend(loc="upper left", fontsize=8)
     right.set_xlabel("robots lost per run")
     right.set_ylabel("runs")
     return png_bytes(fig)

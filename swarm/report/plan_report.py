@@ -92,7 +92,13 @@ def _losses(d: dict) -> dict | None:
     # in mission order (plan.json sorts its keys)
     order = {p: i for i, p in enumerate((*budget.PHASE_NAMES, budget.RETURN_PHASE))}
     phases = dict(sorted(b["expected_losses"].items(), key=lambda kv: order.get(kv[0], len(order))))
-    return {"hazards": b.get("hazards", True), "by_phase": phases, "total": b["expected_lost"]}
+    return {
+        "hazards": b.get("hazards", True),
+        "by_phase": phases,
+        "total": b["expected_lost"],
+        "expended": b.get("expected_expended"),
+        "recovered": b.get("expected_recovered"),
+    }
 
 
 def _relay(d: dict) -> dict | None:
@@ -125,9 +131,10 @@ def _relay(d: dict) -> dict | None:
     }
 
 
-def _checks(search: list[dict], relay: dict | None, criteria: dict) -> list[dict]:
+def _checks(search: list[dict], relay: dict | None, losses: dict | None, criteria: dict) -> list[dict]:
     """What a plan can hold against the success criteria: each search area's expected detection
-    against min_detection_fraction, and every relay link closing (margin >= 0 dB)."""
+    against min_detection_fraction, every relay link closing (margin >= 0 dB), and the robots
+    expected back at sea against min_robots_recovered."""
     out = []
     target = criteria.get("min_detection_fraction")
     if target is not None:
@@ -154,12 +161,26 @@ def _checks(search: list[dict], relay: dict | None, criteria: dict) -> list[dict
                 "met": relay["min_margin_db"] >= 0.0,
             }
         )
+    wanted = criteria.get("min_robots_recovered") or 0
+    if wanted > 0 and losses is not None and losses.get("recovered") is not None:
+        fewest = losses["recovered"][0]  # every mine found marked: the fewest back
+        out.append(
+            {
+                "criterion": "robots expected back at sea, at least",
+                "value": fewest,
+                "target": float(wanted),
+                "unit": "robots",
+                "met": fewest >= wanted,
+            }
+        )
     return out
 
 
 def _check_value(c: dict, key: str) -> str:
     x = c[key]
-    return f"{x:.1%}" if c["unit"] == "fraction" else f"{x:.1f} dB"
+    if c["unit"] == "fraction":
+        return f"{x:.1%}"
+    return f"{x:.1f} robots" if c["unit"] == "robots" else f"{x:.1f} dB"
 
 
 def _verdict(checks: list[dict]) -> dict:
@@ -176,8 +197,8 @@ def _verdict(checks: list[dict]) -> dict:
 
 def plan_data(d: dict, date: str | None = None) -> dict:
     """The plan report's numbers (report.json) from a plan's JSON dict (plan.json)."""
-    search, relay = _search(d), _relay(d)
-    checks = _checks(search, relay, d.get("criteria") or {})
+    search, relay, losses = _search(d), _relay(d), _losses(d)
+    checks = _checks(search, relay, losses, d.get("criteria") or {})
     s = d.get("summary", {})
     return {
         "header": header("plan", d.get("mission"), d.get("map"), d.get("seed"), date),
@@ -193,11 +214,17 @@ def plan_data(d: dict, date: str | None = None) -> dict:
             "expected_coverage": d.get("expected_coverage"),
         },
         "search": search,
-        "losses": _losses(d),
+        "losses": losses,
         "relay": relay,
         "robots": _robots(d),
         "source": d.get("source", {}),
     }
+
+
+def _range(pair: list[float]) -> str:
+    """A plan's at-least and at-most robots ('0.0 to 12.2', or one figure when they agree)."""
+    low, high = pair
+    return f"{low:.1f}" if f"{low:.1f}" == f"{high:.1f}" else f"{low:.1f} to {high:.1f}"
 
 
 def _num(x: object, spec: str, unit: str = "") -> str:
@@ -251,6 +278,13 @@ def summary_table(data: dict) -> list[list[str]]:
         phases = ", ".join(f"{p} {sum(c.values()):.1f}" for p, c in losses["by_phase"].items())
         text = f"{losses['total']:.1f} robots ({phases})" if losses["hazards"] else "none: hazards off"
         rows.append(["expected losses", text])
+        ends = []
+        if losses.get("expended") and losses["expended"][1] > 0:
+            ends.append(f"{_range(losses['expended'])} expended marking mines for the clearance")
+        if losses.get("recovered") is not None:
+            ends.append(f"{_range(losses['recovered'])} back at sea")
+        if ends:
+            rows.append(["expected at the end", ", ".join(ends)])
     if s["expected_coverage"] is not None:
         rows.append(["expected coverage", f"{s['expected_coverage']:.1%}"])
     return rows
@@ -409,6 +443,15 @@ def evaluation_table(ev: dict, expected: dict | None = None) -> list[list[str]]:
         rows.append(
             ["lost per run: simulated / planned", f"{lost['mean']:.1f} / {expected['total']:.1f} ({pairs})"]
         )
+    for key, label in (
+        ("expended", "robots expended in the clearance per run"),
+        ("recovered", "robots back at sea per run"),
+    ):
+        got = ev.get(key)
+        planned = None if expected is None else expected.get(key)
+        if got and ((planned is not None and planned[1] > 0) or got["max"] > 0):
+            text = f"mean {got['mean']:.1f}, {got['min']:g} to {got['max']:g}"
+            rows.append([label, text if planned is None else f"{text}; planned {_range(planned)}"])
     for size in ev.get("sizes", []):
         rows.append(
             [
@@ -477,20 +520,27 @@ def plan_report(
             )
         )
         searched = bool(evaluation.get("detection_values"))
+        # what a run with the plan's losses should show: the simulation loses robots too
+        after_losses = [
+            s["expected_detection"] if (a := s["expected_detection_after_losses"]) is None else a
+            for s in data["search"]
+        ]
+        losses = data.get("losses")
+        expected_lost = losses["total"] if losses is not None and losses["hazards"] else None
         blocks.append(
             Figure(
                 "Detection and losses per simulated run" if searched else "Losses per simulated run",
-                lambda: figs.evaluation_png(
-                    evaluation, criterion, [s["expected_detection"] for s in data["search"]]
-                ),
+                lambda: figs.evaluation_png(evaluation, criterion, after_losses, expected_lost),
                 alt="Histograms over the simulated runs of the fraction of mines detected, with the "
-                "criterion and the plan's expected detection, and of the robots lost per run"
+                "criterion and the plan's expected detection after losses, and of the robots lost "
+                "per run, with the plan's expected losses"
                 if searched
-                else "Histogram of the robots lost per simulated run",
+                else "Histogram of the robots lost per simulated run, with the plan's expected losses",
                 caption="Left: mines detected per run, the success criterion (dashed) and the plan's "
-                "expected detection (solid). Right: robots lost per run."
+                "expected detection after its losses (solid). Right: robots lost per run and the "
+                "plan's expected losses (solid)."
                 if searched
-                else "Robots lost per simulated run.",
+                else "Robots lost per simulated run and the plan's expected losses (solid).",
             )
         )
     shows = [

@@ -96,6 +96,7 @@ def evaluate_plan(
     cols = table.to_pydict()
     (point,) = summary["points"]
     detection = [v for v in cols.get("value_detection", []) if v is not None]
+    ends = {c: [v for v in cols.get(c, []) if v is not None] for c in ("expended", "recovered")}
     result = {
         "runs": point["runs"],
         "successes": point["successes"],
@@ -108,6 +109,8 @@ def evaluate_plan(
         "detection_values": detection,
         "lost": stats.distribution(np.asarray([len(x) for x in cols["losses"]], dtype=np.float64)),
         "lost_values": [len(x) for x in cols["losses"]],
+        # robots the clearance expended (one a mine cleared) and robots back at sea
+        **{c: stats.distribution(np.asarray(v, dtype=np.float64)) if v else None for c, v in ends.items()},
         "losses_by_cause": point["losses_by_cause"],
         "losses_by_phase": point["losses_by_phase"],
         "seeds": cols["seed"],

@@ -16,6 +16,11 @@ Columns, in order:
 - ``planned_lost`` (float64): the robots the point's plan expects to lose (its budget's
   ``expected_lost``, the same in each of the point's rows), to set beside ``lost``; null with the
   hazards off, and in tables written before it existed.
+- ``mines``, ``mines_detected``, ``mines_cleared`` (int32): mines laid, found by a sensor, and set
+  off by the synchronized clearance (each by the robot marking it); null in tables written before
+  they existed.
+- ``expended``, ``recovered`` (int32): robots the clearance expended (their mines' markers), and
+  robots picked up at sea; null in tables written before they existed.
 - ``losses`` (list of struct cause: string, phase: string, t_s: float64, x_m: float64,
   y_m: float64): every loss, for loss maps and losses by phase.
 - ``completed_s`` (float64): mission time when every criterion was first met; null if never.
@@ -42,6 +47,8 @@ LOSS = pa.struct(
         ("y_m", pa.float64()),
     ]
 )
+#: Counts of a run's outcome beside its losses: its mines, and how its robots ended besides lost.
+OUTCOME_COUNTS = ("mines", "mines_detected", "mines_cleared", "expended", "recovered")
 #: Columns that may differ between two runs of the same study (wall-clock time).
 VOLATILE = ("runtime_s",)
 
@@ -68,6 +75,7 @@ def schema(sweep_types: Sequence[tuple[str, pa.DataType]]) -> pa.Schema:
     fields += [pa.field("lost", pa.int32())]
     fields += [pa.field(f"lost_{c}", pa.int32()) for c in CAUSES]
     fields += [pa.field("planned_lost", pa.float64())]
+    fields += [pa.field(c, pa.int32()) for c in OUTCOME_COUNTS]
     fields += [
         pa.field("losses", pa.list_(LOSS)),
         pa.field("completed_s", pa.float64()),

@@ -57,3 +57,53 @@ def test_the_table_puts_simulated_and_planned_side_by_side() -> None:
     assert "lost per run: simulated / planned" not in dict(map(tuple, evaluation_table(_evaluation())))
     off = {**expected, "hazards": False}
     assert "lost per run: simulated / planned" not in dict(map(tuple, evaluation_table(_evaluation(), off)))
+
+
+def test_the_table_puts_the_robots_back_at_sea_beside_the_plan_s() -> None:
+    ev = {**_evaluation(), "recovered": {"mean": 17.46, "min": 9, "max": 21}}
+    plan = {"hazards": True, "total": 4.2, "by_phase": {}, "recovered": [12.8, 23.61]}
+    rows = dict(map(tuple, evaluation_table(ev, plan)))
+    assert rows["robots back at sea per run"] == "mean 17.5, 9 to 21; planned 12.8 to 23.6"
+    # a plan from before the plan said it: the simulation's figure alone
+    assert dict(map(tuple, evaluation_table(ev)))["robots back at sea per run"] == "mean 17.5, 9 to 21"
+    # no return to sea (an older evaluation, or nobody back and nobody expected): no row
+    assert "robots back at sea per run" not in dict(map(tuple, evaluation_table(_evaluation())))
+    nobody = {**_evaluation(), "recovered": {"mean": 0.0, "min": 0, "max": 0}}
+    assert "robots back at sea per run" not in dict(
+        map(tuple, evaluation_table(nobody, {**plan, "recovered": None}))
+    )
+    # the markers the clearance expends, beside the plan's range
+    ev["expended"] = {"mean": 5.58, "min": 0, "max": 15}
+    rows = dict(map(tuple, evaluation_table(ev, {**plan, "expended": [0.0, 12.2]})))
+    assert rows["robots expended in the clearance per run"] == "mean 5.6, 0 to 15; planned 0.0 to 12.2"
+
+
+def _plan_json(recovered: list[float] | None, wanted: int) -> dict:
+    budget = {"hazards": True, "expected_losses": {"beach": {"failure": 3.0}}, "expected_lost": 3.0}
+    if recovered is not None:
+        budget |= {"expected_expended": [0.0, 2.0], "expected_recovered": recovered}
+    return {
+        "mission": "m",
+        "map": "x",
+        "seed": 1,
+        "budget": budget,
+        "criteria": {"min_robots_recovered": wanted},
+    }
+
+
+def test_the_plan_checks_the_fewest_robots_it_expects_back_against_min_robots_recovered() -> None:
+    """The check takes the fewest back (every mine found marked), so the verdict cannot lean on
+    marks the policy may not make."""
+    from swarm.report.plan_report import check_table, plan_data, summary_table
+
+    short = plan_data(_plan_json([4.6, 6.6], 5))
+    assert short["verdict"]["status"] == "not met"
+    assert ["robots expected back at sea, at least", "4.6 robots", "5.0 robots", "NO"] in check_table(short)
+    assert [
+        "expected at the end",
+        "0.0 to 2.0 expended marking mines for the clearance, 4.6 to 6.6 back at sea",
+    ] in summary_table(short)
+    assert plan_data(_plan_json([5.0, 7.0], 5))["verdict"]["status"] == "met"
+    # no criterion on it, or a plan from before the plan said it: nothing to check
+    for d in (_plan_json([4.6, 6.6], 0), _plan_json(None, 5)):
+        assert all("back at sea" not in c["criterion"] for c in plan_data(d)["verdict"].get("checks", []))

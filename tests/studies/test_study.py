@@ -633,3 +633,41 @@ def test_the_summary_keeps_the_sweeps_in_their_order(tiny, tmp_path) -> None:
     run_study(StudySpec(str(tiny), runs=1, sweeps=sweeps, seed=3), tmp_path / "s", workers=1)
     summary = json.loads((tmp_path / "s" / "summary.json").read_text())
     assert swept_keys(summary) == ["swarm.count", "hazards.attrition.mtbf_h"]
+
+
+@pytest.mark.slow
+def test_a_row_counts_the_mines_and_how_every_robot_ended(tmp_path) -> None:
+    """8 robots search the small beach, mark what they find, clear it together and go back to sea:
+    the row's mines found are its detection's share of the mines laid, each robot expended cleared
+    one mine, and every robot launched is lost, expended, recovered or stopped at the time limit."""
+    from swarm.studies.runner import RunTask, run_task
+
+    search = {
+        "type": "search",
+        "area": "search_beach",
+        "sensor": {"model": "cookie_cutter", "sweep_width_m": 4.0},
+        "mark": True,
+        "clearance": {"at_s": 700.0, "standoff_m": 8.0},
+    }
+    phases = {
+        "sea_transit": {"time_limit_s": 300},
+        "surf_crossing": {"time_limit_s": 300},
+        "beach_operations": {"time_limit_s": 600},
+        "return_to_sea": {"enabled": True, "time_limit_s": 600},
+    }
+    path = _mission(
+        tmp_path,
+        "cleared",
+        swarm={"count": 8},
+        tasks=[search],
+        phases=phases,
+        hazards={**QUIET, "mines": {"count": 4, "trigger_probability": 0.0}},
+    )
+    row = run_task(RunTask(str(path), 0, 0, (), 2))
+    assert row["mines"] == 4
+    assert row["mines_detected"] == round(row["value_detection"] * 4)
+    assert row["expended"] == row["mines_cleared"] >= 1, (
+        "the search must mark mines for this to mean anything"
+    )
+    assert row["recovered"] >= 1
+    assert row["lost"] + row["expended"] + row["recovered"] <= row["robots"] == 8
