@@ -135,8 +135,17 @@ def runs_for_width(point: dict, width: float = WIDTH) -> object:
 def study_rows(summary: dict) -> list[list[str]]:
     """One row per parameter point: its swept values, runs, successes, success rate, Wilson interval,
     whether the interval's lower bound reaches the target, median time to success, mean robots lost
-    and the plan's expected losses, and the runs a ±0.05 interval would need."""
+    and the plan's expected losses, the mean mines cleared and robots back at sea where any point
+    has some, and the runs a ±0.05 interval would need."""
     keys = swept_keys(summary)
+    ends = [
+        (key, title)
+        for key, title in (
+            ("mines_cleared_mean", "mean mines cleared"),
+            ("recovered_mean", "mean back at sea"),
+        )
+        if any((_number(p.get(key)) or 0) > 0 for p in summary.get("points") or [])
+    ]
     confidence = summary.get("confidence", 0.95)
     target = _number(summary.get("target"))
     head = keys or ["point"]
@@ -151,6 +160,7 @@ def study_rows(summary: dict) -> list[list[str]]:
             "median time to success (s)",
             "mean lost per run",
             "plan's expected losses",
+            *(title for _, title in ends),
             f"runs for ±{WIDTH:g}",
         ]
     ]
@@ -173,6 +183,7 @@ def study_rows(summary: dict) -> list[list[str]]:
                 _seconds(median),
                 _fmt(p.get("lost_mean"), ".2f"),
                 _fmt(p.get("planned_lost"), ".2f"),
+                *(_fmt(p.get(key), ".2f") for key, _ in ends),
                 MISSING if needed is None else f"{needed:.0f}",
             ]
         )

@@ -201,13 +201,15 @@ def _batch_sizes(spec: StudySpec, tasks: list[RunTask], batch: int | None, worke
 
 def summarize(spec: StudySpec, table: pa.Table) -> dict:
     """Per point: success rate with its Wilson interval, completion times, losses by cause and
-    phase, runs for narrower intervals; the required value of the first swept key; totals."""
+    phase, mean mines cleared and robots back at sea, runs for narrower intervals; the required
+    value of the first swept key; totals."""
     cols = table.to_pydict()
     point_of = np.asarray(cols["point"], dtype=np.int64)
     success = np.asarray(cols["success"], dtype=bool)
     completed = np.array([np.nan if v is None else v for v in cols["completed_s"]], dtype=np.float64)
     losses = cols["losses"]
     planned = cols.get("planned_lost") or [None] * len(point_of)  # absent from older tables
+    ends = {c: cols.get(c) or [None] * len(point_of) for c in ("mines_cleared", "recovered")}
     out_points = []
     for p, params in enumerate(spec.points()):
         mine = np.flatnonzero(point_of == p)
@@ -229,6 +231,9 @@ def summarize(spec: StudySpec, table: pa.Table) -> dict:
                 "losses_by_phase": by_phase,
                 "lost_mean": float(np.mean([len(losses[i]) for i in mine])) if n else 0.0,
                 "planned_lost": next((planned[i] for i in mine if planned[i] is not None), None),
+                # how the mission ended besides its losses: mines the clearance set off, robots
+                # picked up at sea (None from tables written before they were counted)
+                **{f"{c}_mean": _mean_of([v[i] for i in mine]) for c, v in ends.items()},
                 # total runs for a Wilson interval of ± h at the observed rate, and how many more
                 "runs_for_width": {f"{h:g}": _runs_for(rate, h, spec.confidence, n) for h in HALF_WIDTHS},
                 "more_runs_for_width": {
@@ -253,6 +258,12 @@ def summarize(spec: StudySpec, table: pa.Table) -> dict:
         "losses_by_phase": by_phase,
         "version": getattr(swarm, "__version__", "unknown"),
     }
+
+
+def _mean_of(values: list) -> float | None:
+    """The mean of the values that are there; None when none is."""
+    there = [v for v in values if v is not None]
+    return float(np.mean(there)) if there else None
 
 
 def _runs_for(rate: float, half_width: float, confidence: float, n: int) -> int | None:

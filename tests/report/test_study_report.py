@@ -391,3 +391,37 @@ def test_a_median_time_of_x_5_rounds_half_up(median: float | None, shown: str) -
     point = {"params": {}, "runs": 2, "successes": 2, "completed_s": {"completed": 2, "median": median}}
     rows = study_rows({"points": [point]})
     assert column(rows, "median time to success (s)") == [shown]
+
+
+def test_the_points_say_the_mines_cleared_and_the_robots_back_where_a_mission_has_them() -> None:
+    """The summary's per-point means of the table's mines cleared and robots back at sea (None
+    from a table written before they were counted), and the report's columns for them only where
+    some point has any."""
+    from swarm.studies.study import StudySpec, summarize
+    from swarm.studies.sweep import parse_sweeps
+
+    spec = StudySpec(
+        str(ROOT / "missions" / "full_conops.yaml"), 2, parse_sweeps(["swarm.count=30,42"]), seed=1
+    )
+    base = {"success": [True, False, True, True], "losses": [[]] * 4, "completed_s": [1.0, None, 2.0, 3.0]}
+    table = pa.table(
+        {
+            "point": pa.array([0, 0, 1, 1], pa.int32()),
+            "run": pa.array([0, 1, 0, 1], pa.int32()),
+            **base,
+            "mines_cleared": pa.array([3, 0, 9, None], pa.int32()),
+            "recovered": pa.array([10, 12, 15, 18], pa.int32()),
+        }
+    )
+    points = summarize(spec, table)["points"]
+    assert [(p["mines_cleared_mean"], p["recovered_mean"]) for p in points] == [(1.5, 11.0), (9.0, 16.5)]
+    rows = study_rows({"points": points})
+    assert column(rows, "mean mines cleared") == ["1.50", "9.00"]
+    assert column(rows, "mean back at sea") == ["11.00", "16.50"]
+    older = summarize(spec, pa.table({"point": table["point"], "run": table["run"], **base}))["points"]
+    assert older[0]["mines_cleared_mean"] is None and older[1]["recovered_mean"] is None
+    # a mission that clears nothing and brings nobody back has no such columns
+    header = study_rows(
+        {"points": [{**p, "mines_cleared_mean": 0.0, "recovered_mean": None} for p in points]}
+    )[0]
+    assert "mean mines cleared" not in header and "mean back at sea" not in header
