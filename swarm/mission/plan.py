@@ -951,9 +951,10 @@ def _budget(mission: Mission, plan: MissionPlan) -> dict:
         # robot of the team that lasts marks a mine, as many as when only the reserves do, and the
         # losses on the way (a robot each, at the same rate) those of the most that set off
         per_returner = sum(way_back.values()) / returning
-        setting_off = [max(returning - m, 0.0) for m in reversed(markers)]
-        per_phase[budget.RETURN_PHASE] = {c: v * setting_off[1] / returning for c, v in way_back.items()}
-        recovered = [n * (1.0 - per_returner) for n in setting_off]
+        least, most = markers
+        fewest_off, most_off = max(returning - most, 0.0), max(returning - least, 0.0)
+        per_phase[budget.RETURN_PHASE] = {c: v * most_off / returning for c, v in way_back.items()}
+        recovered = [fewest_off * (1.0 - per_returner), most_off * (1.0 - per_returner)]
     total = sum(sum(c.values()) for c in per_phase.values())
     return {
         "hazards": budget.hazards_enabled(mission),

@@ -23,6 +23,7 @@ from swarm.studies import stats
 from swarm.studies.store import SPEC, read_study_file
 from swarm.studies.study import Progress, StudySpec, run_study
 from swarm.studies.sweep import Sweep
+from swarm.studies.table import END_COUNTS
 
 #: Runs per size of the quick sweep that suggests a size when the target is missed.
 QUICK_RUNS = 16
@@ -96,7 +97,7 @@ def evaluate_plan(
     cols = table.to_pydict()
     (point,) = summary["points"]
     detection = [v for v in cols.get("value_detection", []) if v is not None]
-    ends = {c: [v for v in cols.get(c, []) if v is not None] for c in ("expended", "recovered")}
+    ends = {c: [v for v in cols.get(c, []) if v is not None] for c in END_COUNTS}
     result = {
         "runs": point["runs"],
         "successes": point["successes"],

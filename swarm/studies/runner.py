@@ -25,7 +25,7 @@ from functools import lru_cache
 import numpy as np
 
 from swarm.sim.hazards import CAUSES
-from swarm.studies.table import CRITERIA, OUTCOME_COUNTS, loss_row, param_column
+from swarm.studies.table import CRITERIA, END_COUNTS, MINE_COUNTS, loss_row, param_column
 
 #: Points whose mission and plan a worker keeps.
 PREPARED_CACHE = 16
@@ -129,9 +129,8 @@ def _row(task: RunTask, mission, plan, log, runtime_s: float) -> dict:
         row[f"lost_{c}"] = causes.get(c, 0)
     row["planned_lost"] = plan.expected_lost
     summary = log.summary()
-    ends = summary["end_states"]
-    row.update({c: int(summary[c]) for c in OUTCOME_COUNTS[:3]})
-    row.update({c: int(ends.get(c, 0)) for c in OUTCOME_COUNTS[3:]})
+    row.update({c: int(summary[c]) for c in MINE_COUNTS})
+    row.update({c: int(summary["end_states"].get(c, 0)) for c in END_COUNTS})
     row["losses"] = [loss_row(x) for x in log.losses]
     row["completed_s"] = None if log.completed_s is None else float(log.completed_s)
     row["duration_s"] = float(log.times_s[-1]) if len(log.times_s) else 0.0

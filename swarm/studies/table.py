@@ -47,8 +47,11 @@ LOSS = pa.struct(
         ("y_m", pa.float64()),
     ]
 )
-#: Counts of a run's outcome beside its losses: its mines, and how its robots ended besides lost.
-OUTCOME_COUNTS = ("mines", "mines_detected", "mines_cleared", "expended", "recovered")
+#: Counts of a run's outcome beside its losses: its mines (as the log's summary counts them), and
+#: how its robots ended besides lost (the summary's end states).
+MINE_COUNTS = ("mines", "mines_detected", "mines_cleared")
+END_COUNTS = ("expended", "recovered")
+OUTCOME_COUNTS = MINE_COUNTS + END_COUNTS
 #: Columns that may differ between two runs of the same study (wall-clock time).
 VOLATILE = ("runtime_s",)
 
