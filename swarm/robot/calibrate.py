@@ -288,7 +288,7 @@ def predicted_poses(
         state0 = sim.state_at_rest(np.broadcast_to(run.pose0, (k, 3)))
         t, states = sim.simulate_fixed(
             state0,
-            lambda a, b, k=k: np.broadcast_to(run.wheels.mean_speeds(a, b), (k, 2)),
+            run.wheels,
             coeffs_for([modes[i] for i in members]),
             run.wheels.duration_s if t_end_s is None else t_end_s,
             dt_s,

@@ -146,21 +146,16 @@ def wheel_loads(
     """
     (front, rear), (left, right) = robot.static_load_shares
     support = np.reshape(support_n, -1)
-    loads = np.empty((2, 2, support.shape[0]))
-    loads[0, 0] = support * (left * front)
-    loads[0, 1] = support * (left * rear)
-    loads[1, 0] = support * (right * front)
-    loads[1, 1] = support * (right * rear)
+    # (side, axle, 1) shares: whole-array operations, the same floats as side by side and axle by axle
+    loads = support * np.array([[[left * front], [left * rear]], [[right * front], [right * rear]]])
     if ground_accel_mps2 is None:
         return loads
     acc = np.reshape(ground_accel_mps2, (-1, 2))
     mh = robot.mass_kg * robot.com_height_or_axle_m
     to_rear = mh * acc[:, 0] / robot.wheelbase_m  # total moved from the front axle to the rear
     to_right = mh * acc[:, 1] / robot.track_width_m  # total moved from the left side to the right
-    loads[:, 0] -= to_rear * np.array([[left], [right]])
-    loads[:, 1] += to_rear * np.array([[left], [right]])
-    loads[0] -= to_right * np.array([[front], [rear]])
-    loads[1] += to_right * np.array([[front], [rear]])
+    loads += to_rear * np.array([[[-left], [left]], [[-right], [right]]])
+    loads += to_right * np.array([[[-front], [-rear]], [[front], [rear]]])
     return np.maximum(loads, 0.0, out=loads)
 
 

@@ -97,8 +97,6 @@ def _skid(
             state0, wheels.smooth_speed_at, coeffs, t, rtol=1e-5, atol=1e-7, max_step_s=dt_s
         )
     else:
-        t, states = sim.simulate_fixed(
-            state0, lambda a, b: wheels.mean_speeds(a, b)[None], coeffs, wheels.duration_s, dt_s
-        )
+        t, states = sim.simulate_fixed(state0, wheels, coeffs, wheels.duration_s, dt_s)
     pose = sim.wheel_centre_pose(states[:, 0])
     return Trajectory(t, pose[:, 0], pose[:, 1], pose[:, 2])

@@ -55,6 +55,12 @@ class WheelInput:
         """Mean wheel angular velocity (2,) over [t0, t1]: exact travel divided by time."""
         return (self.angles_at(t1_s) - self.angles_at(t0_s)) / (t1_s - t0_s)
 
+    def step_speeds(self, times_s: np.ndarray) -> np.ndarray:
+        """`mean_speeds` over each step between consecutive `times_s` (k + 1,), as (k, 2), the
+        same numbers: a fixed-step integrator looks them all up at once instead of one per step."""
+        angles = self.angles_at(times_s)
+        return (angles[1:] - angles[:-1]) / np.diff(times_s)[:, None]
+
     def smooth_speed_at(self, t_s: float) -> np.ndarray:
         """Continuous speed (2,): interval mean speeds joined linearly between interval midpoints.
 

@@ -51,7 +51,8 @@ def synthetic_run(mode, seconds: float = 12.0, robot=ROBOT, adaptive: bool = Tru
 @pytest.mark.slow
 def test_skid_calibration_recovers_the_coefficients_that_made_the_data() -> None:
     """Without the prior toward the defaults, the fit finds what generated the data (up to the
-    fixed-step integrator's difference from the adaptive one that made it)."""
+    difference of calibration's own fixed step, the default, from the adaptive run that made it:
+    measured, mu_lateral 0.2475 and turning resistance 0.0796 m)."""
     true = replace(LIB["concrete"], mu_lateral=0.25, turning_resistance_m=0.08, shear_slip=0.05)
     run = synthetic_run(true)
     result = calibrate(
@@ -60,7 +61,6 @@ def test_skid_calibration_recovers_the_coefficients_that_made_the_data() -> None
         LIB["concrete"],
         "skid",
         free=["mu_lateral", "turning_resistance_m"],
-        dt_s=0.002,
         max_evaluations=30,
         prior_m=0.0,
     )
