@@ -1,5 +1,6 @@
 """The suite's order: the slow tests first, so that when the suite runs on several cores
-(`scripts/test`: pytest-xdist) no core is left with a long test at the end while the others idle."""
+(`scripts/test`: pytest-xdist handing out a test or two at a time) no core is left with a long
+test at the end while the others idle."""
 
 from __future__ import annotations
 
