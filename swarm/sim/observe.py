@@ -45,6 +45,9 @@ class Observer:
         fx, fy = np.meshgrid(offs, offs, indexing="ij")
         #: Body-frame sample offsets of the terrain patch (rows forward, columns left), flattened.
         self.patch_offsets = (fx.ravel(), fy.ravel())
+        #: How far the patch reaches from the robot, in cells, with a cell to spare for rounding:
+        #: a robot this far inside the grid samples it without clamping (`_fill`'s fast path).
+        self.patch_reach_cells = float(np.hypot(fx, fy).max() / setup.beach.cell_m + 1.0)
         self.patch_grid = setup.patch_grid
         k = layout.neighbours
         #: (runs, n, k) each robot's table neighbours (-1: none) and whether the link to each works.
@@ -64,20 +67,19 @@ class Observer:
     def observe(self, world, runs: list[int]) -> np.ndarray:
         """(len(runs), n, obs_dim) float32: every robot's observation in runs `runs` now."""
         n, lay, r = self.n, self.layout, len(runs)
-        out = np.zeros((r * n, lay.size), np.float32)
+        out = np.empty((r * n, lay.size), np.float32)  # `_fill` writes every column
         sl = lay.slices
         on = world.alive & world.on_map
         self._refresh_stale(world, runs, on[runs])
-        rows = (np.asarray(runs, dtype=np.intp)[:, None] * n + np.arange(n)).ravel()
         bm, routes = self.setup.beach, world.routes
         fx, fy = self.patch_offsets
         _fill(
-            out, rows, n, world.robot_state, world.energy_wh, world.inverted, world.submersion,
-            world.slip, world.phase, float(self.capacity_wh), fx, fy, self.patch_grid,
+            out, np.asarray(runs, dtype=np.intp), n, world.robot_state, world.energy_wh, world.inverted,
+            world.submersion, world.slip, world.phase, float(self.capacity_wh), fx, fy, self.patch_grid,
             float(bm.origin_m[0]), float(bm.origin_m[1]), 1.0 / bm.cell_m, bm.shape[0], bm.shape[1],
-            world.link_degree, world.source_hops, world.isolated_s, world.role, world.command,
-            FOLLOW, RETURN, routes.points, routes.start, routes.end, routes.cursor, world.target_m,
-            world.marking, self._tables, self._linked, on, sl["patch_speed"].start,
+            self.patch_reach_cells, world.link_degree, world.source_hops, world.isolated_s, world.role,
+            world.command, FOLLOW, RETURN, routes.points, routes.start, routes.end, routes.cursor,
+            world.target_m, world.marking, self._tables, self._linked, on, sl["patch_speed"].start,
             sl["neighbours"].start, sl["links"].start, sl["task"].start, len(ROLES),
         )  # fmt: skip
         task = out[:, sl["task"]]
@@ -168,78 +170,89 @@ class Observer:
 
 @numba.njit(cache=True, error_model="numpy")
 def _fill(
-    out, rows, n, state, energy, inverted, submersion, slip, phase, capacity,
-    fx, fy, grid, origin_x, origin_y, inv_cell, grid_rows, grid_cols,
+    out, runs, n, state, energy, inverted, submersion, slip, phase, capacity,
+    fx, fy, grid, origin_x, origin_y, inv_cell, grid_rows, grid_cols, reach,
     degree, hops, isolated, role, command, follow, ret, points, start, end, cursor, target, marking,
     tables, linked, here, patch_at, neighbours_at, links_at, task_at, n_roles,
 ):  # fmt: skip
-    """Every column of rows `rows` of the batch (flat robot index b * n + i) but the nearest object
+    """Every column of `out` (row r * n + i: robot i of run `runs[r]`), zero for the nearest object
     and the clock: one pass per robot, each number computed in numpy's order and precision (the
-    module docstring's promise: alone or batched, the same floats)."""
+    module docstring's promise: alone or batched, the same floats). A robot whose whole patch is
+    inside the grid (`reach` cells from its edges) reads its cells without clamping them."""
     cap32 = np.float32(capacity)
+    clip = np.float32(ELEVATION_CLIP_M)
     k2 = fx.shape[0]
     kn = tables.shape[2]
-    for o in range(rows.shape[0]):
-        row = rows[o]
-        b, i = row // n, row % n
-        x, y, th = state[b, i, 0], state[b, i, 1], state[b, i, 2]
-        c, s = np.cos(th), np.sin(th)
-        line = out[o]
-        line[0], line[1], line[2], line[3] = x, y, c, s
-        line[4], line[5], line[6] = state[b, i, 3], state[b, i, 4], state[b, i, 5]
-        e = np.float32(energy[b, i])
-        line[7] = min(max(e, np.float32(0.0)), cap32) / cap32
-        line[8] = inverted[b, i]
-        line[9] = submersion[b, i]
-        line[10] = min(max(np.float32(slip[b, i]), np.float32(0.0)), np.float32(1.0))
-        line[11 + phase[b, i]] = 1.0
-        # the terrain patch in the body frame, one cell per sample: the cell the physics reads
-        # there; elevation against the robot's own cell (the patch's centre when it has one)
-        here_elev = grid[cell_index(x, y, origin_x, origin_y, inv_cell, grid_rows, grid_cols), 1]
-        for q in range(k2):
-            px = x + c * fx[q] - s * fy[q]
-            py = y + s * fx[q] + c * fy[q]
-            cell = cell_index(px, py, origin_x, origin_y, inv_cell, grid_rows, grid_cols)
-            line[patch_at + q] = grid[cell, 0]
-            d = grid[cell, 1] - here_elev
-            line[patch_at + k2 + q] = min(max(d, np.float32(-ELEVATION_CLIP_M)), np.float32(ELEVATION_CLIP_M))
-        # table neighbours present now, body-frame offset, distance, link working
-        if here[b, i]:
-            for j in range(kn):
-                other = tables[b, i, j]
-                if other < 0 or not here[b, other]:
-                    continue
-                dx = state[b, other, 0] - x
-                dy = state[b, other, 1] - y
-                fwd = c * dx + s * dy
-                left = c * dy - s * dx
-                at = neighbours_at + 5 * j
-                line[at] = 1.0
-                line[at + 1] = fwd
-                line[at + 2] = left
-                line[at + 3] = math.sqrt(fwd * fwd + left * left)
-                line[at + 4] = linked[b, i, j]
-        h = hops[b, i]
-        line[links_at] = degree[b, i]
-        line[links_at + 1] = h >= 0
-        line[links_at + 2] = h
-        line[links_at + 3] = isolated[b, i]
-        line[task_at + role[b, i]] = 1.0
-        if command[b, i] == follow or command[b, i] == ret:
-            # the last point of its route, its own position without one
-            last = end[row] - 1 if end[row] > start[row] else -1
-            gx = points[last, 0] - x if last >= 0 else x - x
-            gy = points[last, 1] - y if last >= 0 else y - y
-        else:
-            gx, gy = target[b, i, 0] - x, target[b, i, 1] - y
-        fwd = c * gx + s * gy
-        left = c * gy - s * gx
-        line[task_at + n_roles] = fwd
-        line[task_at + n_roles + 1] = left
-        line[task_at + n_roles + 2] = math.sqrt(fwd * fwd + left * left)
-        length = end[row] - start[row]  # the fraction of its route's waypoints passed, 1 without one
-        line[task_at + n_roles + 3] = (cursor[row] - start[row]) / max(length, 1) if length > 0 else 1.0
-        line[task_at + n_roles + 4] = marking[b, i] >= 0
+    width = out.shape[1]
+    for r in range(runs.shape[0]):
+        b = runs[r]
+        for i in range(n):
+            row = b * n + i
+            line = out[r * n + i]
+            for col in range(width):
+                line[col] = 0.0
+            x, y, th = state[b, i, 0], state[b, i, 1], state[b, i, 2]
+            c, s = np.cos(th), np.sin(th)
+            line[0], line[1], line[2], line[3] = x, y, c, s
+            line[4], line[5], line[6] = state[b, i, 3], state[b, i, 4], state[b, i, 5]
+            e = np.float32(energy[b, i])
+            line[7] = min(max(e, np.float32(0.0)), cap32) / cap32
+            line[8] = inverted[b, i]
+            line[9] = submersion[b, i]
+            line[10] = min(max(np.float32(slip[b, i]), np.float32(0.0)), np.float32(1.0))
+            line[11 + phase[b, i]] = 1.0
+            # the terrain patch in the body frame, one cell per sample: the cell the physics reads
+            # there; elevation against the robot's own cell (the patch's centre when it has one)
+            here_elev = grid[cell_index(x, y, origin_x, origin_y, inv_cell, grid_rows, grid_cols), 1]
+            u, v = (x - origin_x) * inv_cell, (y - origin_y) * inv_cell
+            inside = u >= reach and v >= reach and u + reach < grid_cols and v + reach < grid_rows
+            for q in range(k2):
+                px = x + c * fx[q] - s * fy[q]
+                py = y + s * fx[q] + c * fy[q]
+                if inside:  # `cell_index` without its clamps, which cannot bind here
+                    cell = int((py - origin_y) * inv_cell) * grid_cols + int((px - origin_x) * inv_cell)
+                else:
+                    cell = cell_index(px, py, origin_x, origin_y, inv_cell, grid_rows, grid_cols)
+                line[patch_at + q] = grid[cell, 0]
+                d = grid[cell, 1] - here_elev
+                line[patch_at + k2 + q] = min(max(d, -clip), clip)
+            # table neighbours present now, body-frame offset, distance, link working
+            if here[b, i]:
+                for j in range(kn):
+                    other = tables[b, i, j]
+                    if other < 0 or not here[b, other]:
+                        continue
+                    dx = state[b, other, 0] - x
+                    dy = state[b, other, 1] - y
+                    fwd = c * dx + s * dy
+                    left = c * dy - s * dx
+                    at = neighbours_at + 5 * j
+                    line[at] = 1.0
+                    line[at + 1] = fwd
+                    line[at + 2] = left
+                    line[at + 3] = math.sqrt(fwd * fwd + left * left)
+                    line[at + 4] = linked[b, i, j]
+            h = hops[b, i]
+            line[links_at] = degree[b, i]
+            line[links_at + 1] = h >= 0
+            line[links_at + 2] = h
+            line[links_at + 3] = isolated[b, i]
+            line[task_at + role[b, i]] = 1.0
+            if command[b, i] == follow or command[b, i] == ret:
+                # the last point of its route, its own position without one
+                last = end[row] - 1 if end[row] > start[row] else -1
+                gx = points[last, 0] - x if last >= 0 else x - x
+                gy = points[last, 1] - y if last >= 0 else y - y
+            else:
+                gx, gy = target[b, i, 0] - x, target[b, i, 1] - y
+            fwd = c * gx + s * gy
+            left = c * gy - s * gx
+            line[task_at + n_roles] = fwd
+            line[task_at + n_roles + 1] = left
+            line[task_at + n_roles + 2] = math.sqrt(fwd * fwd + left * left)
+            length = end[row] - start[row]  # the fraction of its route's waypoints passed, 1 without one
+            line[task_at + n_roles + 3] = (cursor[row] - start[row]) / max(length, 1) if length > 0 else 1.0
+            line[task_at + n_roles + 4] = marking[b, i] >= 0
 
 
 @numba.njit(cache=True, error_model="numpy")

@@ -136,6 +136,47 @@ def test_terrain_patch_samples_the_cells_around_each_robot_in_its_body_frame(tmp
     assert checked >= 2 * ROBOTS * size * size // 2
 
 
+def test_the_patch_reads_the_cells_the_physics_reads_from_the_middle_of_the_map_to_past_its_edge(
+    tmp_path,
+) -> None:
+    """Robots put anywhere from the map's middle to past its corner, at every heading: each sample
+    is the cell the physics finds under it (the nearest edge cell off the map), on both sides of
+    the distance from the edge where the observation stops clamping its cell lookups. The grid's
+    values are made different in every cell, so reading a neighbouring cell cannot pass."""
+    path = write_mission(tmp_path, "edges", swarm={"count": ROBOTS})
+    env = swarm.sim.vector_env(mission=path, num_envs=2, seed=2, config=swarm.sim.SimConfig(patch_size=5))
+    env.reset(seed=2)
+    setup, world = env.observer.setup, env.world
+    beach = setup.beach
+    rows, cols = beach.shape
+    x0, y0 = beach.origin_m
+    reach_m = env.observer.patch_reach_cells * beach.cell_m
+    rng = np.random.default_rng(4)
+    grid = rng.permutation(rows * cols * 2).reshape(-1, 2).astype(np.float32)
+    env.observer.patch_grid = grid
+    first = _column(env, "speed_0_0")
+    checked = 0
+    width_m = cols * beach.cell_m
+    places = (0.5 * width_m, reach_m - 1e-9, reach_m, reach_m + 0.37, 2.0, 1.0, 0.3, -2.0)
+    for along in (*places, width_m - reach_m, width_m - 1.0, width_m + 2.0):
+        for b in range(2):
+            world.robot_state[b, :, 0] = x0 + along + rng.uniform(-0.01, 0.01, ROBOTS)
+            world.robot_state[b, :, 1] = y0 + rng.uniform(-3.0, rows * beach.cell_m + 3.0, ROBOTS)
+            world.robot_state[b, :, 2] = rng.uniform(-np.pi, np.pi, ROBOTS)
+        obs = env.observer.observe(world, [0, 1])
+        for b in range(2):
+            for i in range(ROBOTS):
+                x, y, th = world.robot_state[b, i, :3]
+                fwd = (np.arange(25) // 5 - 2.0) * 1.0
+                left = (np.arange(25) % 5 - 2.0) * 1.0
+                px = x + np.cos(th) * fwd - np.sin(th) * left
+                py = y + np.sin(th) * fwd + np.cos(th) * left
+                cells = setup.physics._cells(px, py)
+                np.testing.assert_array_equal(obs[b, i, first : first + 25], grid[cells, 0])
+                checked += 25
+    assert checked == 11 * 2 * ROBOTS * 25
+
+
 def test_a_lost_neighbour_shows_absent_until_the_radio_table_is_made_again(tmp_path) -> None:
     """The table is each robot's k nearest robots on the map when it was made (at a radio update
     or an arrival); a robot lost since is absent from it (present 0), not replaced, until the
