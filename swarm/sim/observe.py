@@ -56,6 +56,8 @@ class Observer:
         #: (runs,) the radio update each run's table is of; (runs, n) who was on the map then.
         self._table_version = np.full(runs, -1, dtype=np.int64)
         self._table_on = np.zeros((runs, self.n), bool)
+        #: `_open_objects`' last answer: (world, runs, their `objects_version`, the answer).
+        self._objects_cache: tuple | None = None
 
     def reset_run(self, b: int) -> None:
         """Forget run b's neighbour tables (a new episode)."""
@@ -142,30 +144,39 @@ class Observer:
         """Body-frame offset to the nearest object found and not yet marked: every pair looked at
         for the runs whose objects are few (all of them in one pass), a k-d tree where many."""
         n = self.n
-        dense: list[int] = []
-        for j in np.flatnonzero(world.object_count[runs] > 0).tolist():
-            b = runs[j]
-            run = world.runs[b]
-            count = int(np.count_nonzero(run.object_marker < 0))
-            if not count:
-                continue
-            if count * n <= DENSE_NEAREST_PAIRS:
-                dense.append(j)
-                continue
-            objs = run.objects_m[run.object_marker < 0]
+        dense, objs, open_, starts, many = self._open_objects(world, runs)
+        for j in many:
+            run = world.runs[runs[j]]
+            found = run.objects_m[run.object_marker < 0]
             xy = run.robot_state[:, :2]
-            near = cKDTree(objs).query(xy)[1]
-            block[j * n : (j + 1) * n] = to_body(objs[near] - xy, run.robot_state[:, 2])
-        if not dense:
-            return
+            near = cKDTree(found).query(xy)[1]
+            block[j * n : (j + 1) * n] = to_body(found[near] - xy, run.robot_state[:, 2])
+        if len(dense):
+            picked = np.asarray(runs, np.intp)[dense]
+            _nearest_open(world.robot_state, picked, dense * n, objs, open_, starts, block)
+
+    def _open_objects(self, world, runs: list[int]) -> tuple:
+        """For `_observe_objects`: the places in `runs` of the runs with few objects open, their
+        objects, which are open and where each run's begin; the places of the runs with many.
+        Made again only when a run's objects or markers have changed (`World.objects_version`)."""
+        versions = world.objects_version[runs]
+        cached = self._objects_cache
+        same = cached is not None and cached[0] is world and cached[1] == runs
+        if same and np.array_equal(cached[2], versions):
+            return cached[3]
+        dense: list[int] = []
+        many: list[int] = []
+        for j in np.flatnonzero(world.object_count[runs] > 0).tolist():
+            count = int(np.count_nonzero(world.runs[runs[j]].object_marker < 0))
+            if count:
+                (dense if count * self.n <= DENSE_NEAREST_PAIRS else many).append(j)
         picked = [world.runs[runs[j]] for j in dense]
-        objs = np.concatenate([run.objects_m for run in picked])
-        open_ = np.concatenate([run.object_marker < 0 for run in picked])
+        objs = np.concatenate([run.objects_m for run in picked]) if picked else np.empty((0, 2))
+        open_ = np.concatenate([run.object_marker < 0 for run in picked]) if picked else np.empty(0, bool)
         starts = np.cumsum([0] + [len(run.objects_m) for run in picked])
-        _nearest_open(
-            world.robot_state, np.asarray(runs, np.intp)[dense], np.asarray(dense, np.intp) * n,
-            objs, open_, starts, block,
-        )  # fmt: skip
+        found = (np.asarray(dense, np.intp), objs, open_, starts, many)
+        self._objects_cache = (world, list(runs), versions, found)
+        return found
 
 
 @numba.njit(cache=True, error_model="numpy")

@@ -72,6 +72,7 @@ class RunView:
         self.seed: int | None = None
         self.events: list[dict] = []
         self.end_reason: list[str | None] = [None] * self.n
+        self._objects_m = np.empty((0, 2))
         self._object_marker = np.empty(0, dtype=np.int64)
 
     def bind(self) -> None:
@@ -91,6 +92,16 @@ class RunView:
         return state
 
     @property
+    def objects_m(self) -> np.ndarray:
+        """(objects, 2) where each object found is."""
+        return self._objects_m
+
+    @objects_m.setter
+    def objects_m(self, xy: np.ndarray) -> None:
+        self._objects_m = xy
+        self.world.objects_version[self.b] += 1
+
+    @property
     def object_marker(self) -> np.ndarray:
         """(objects,) the robot marking each object found (-1: none yet)."""
         return self._object_marker
@@ -100,6 +111,13 @@ class RunView:
         # the objects found change with it: the world keeps every run's count (`Observer` reads it)
         self._object_marker = marker
         self.world.object_count[self.b] = len(marker)
+        self.world.objects_version[self.b] += 1
+
+    def set_marker(self, k: int, i: int) -> None:
+        """Object k's marker is now robot i (-1: none), as `Observer` learns from the world's count
+        of changes."""
+        self._object_marker[k] = i
+        self.world.objects_version[self.b] += 1
 
     @property
     def links_version(self) -> int:
@@ -259,7 +277,7 @@ class RunView:
         self.marking[i] = -1
         self.mark_placed[i] = False
         if k >= 0 and self.object_marker[k] == i:
-            self.object_marker[k] = -1
+            self.set_marker(k, -1)
             if self.object_mine[k] >= 0:
                 self.minefield.marked[self.object_mine[k]] = False
             self.log_event("unmark", int(i), object=int(k))

@@ -159,6 +159,8 @@ class World:
         self.scored = np.ones(b, bool)
         self.beach_started = np.zeros(b, bool)  # each run's `score.beach_start_s` is known
         self.object_count = np.zeros(b, dtype=np.int64)  # each run's objects found (`RunView`)
+        #: (B,) changes so far to each run's objects and their markers (`RunView`; `Observer` reads it)
+        self.objects_version = np.zeros(b, dtype=np.int64)
         self._streams: dict[str, list] = {}  # each run's generator of a stream, by stream
         self._typed_streams: dict[str, List] = {}  # the same, for compiled loops (`draws`)
         self.routes = Routes(b * n)
@@ -616,7 +618,7 @@ class World:
         for b, i, obj in zip(bs[near].tolist(), who[near].tolist(), k[near].tolist(), strict=True):
             run = self.runs[b]
             if run.object_marker[obj] < 0:
-                run.object_marker[obj] = i
+                run.set_marker(obj, i)
                 run.mark_placed[i] = True
                 if run.object_mine[obj] >= 0:
                     run.minefield.marked[run.object_mine[obj]] = True

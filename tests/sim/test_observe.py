@@ -65,6 +65,40 @@ def test_nearest_unmarked_mine_in_the_body_frame(vec, dense_pairs, monkeypatch) 
             run.objects_m, run.object_marker = objects, marker
 
 
+def test_the_nearest_open_object_follows_every_change_to_the_objects_and_their_markers(vec) -> None:
+    """The observer keeps which objects are open from step to step; each way a run's objects
+    change (found, marked, unmarked, moved, all marked) shows in the very next observation's
+    nearest-object columns, as a fresh observer sees them."""
+    runs = list(range(RUNS))
+    x = _column(vec, "mine_dx_m")
+    run = vec.world.runs[1]
+    saved = (run.objects_m, run.object_marker)
+
+    def fresh() -> np.ndarray:
+        return observe.Observer(vec.observer.setup, vec.observer.layout, RUNS).observe(vec.world, runs)
+
+    me = run.robot_state[0, :2]
+    changes = [
+        lambda: setattr(run, "objects_m", np.array([me + 1.0, me + 30.0])),
+        lambda: setattr(run, "object_marker", np.array([-1, -1])),
+        lambda: run.set_marker(0, 3),
+        lambda: run.set_marker(0, -1),
+        lambda: setattr(run, "objects_m", np.array([me - 2.0, me + 30.0])),
+        lambda: setattr(run, "object_marker", np.array([5, 5])),
+    ]
+    try:
+        run.objects_m, run.object_marker = np.empty((0, 2)), np.empty(0, np.int64)
+        before = vec.observer.observe(vec.world, runs)[1, 0, x : x + 2]
+        for change in changes:
+            change()
+            now = vec.observer.observe(vec.world, runs)[..., x : x + 2]
+            np.testing.assert_array_equal(now, fresh()[..., x : x + 2])
+            assert not np.array_equal(now[1, 0], before) or change is changes[0]
+            before = now[1, 0]
+    finally:
+        run.objects_m, run.object_marker = saved
+
+
 def test_neighbours_are_the_table_robots_in_the_body_frame(vec) -> None:
     """Each present neighbour's columns: the offset to that robot in the body frame, its
     distance, and whether their link works; absent slots are zero."""
