@@ -73,6 +73,7 @@ from typing import NamedTuple
 import numpy as np
 from scipy.integrate import solve_ivp
 
+from swarm.robot import skid_run
 from swarm.robot.params import GRAVITY_MPS2, RobotParams, wheel_loads
 from swarm.robot.terrain import COEFFICIENTS, TerrainMode
 from swarm.robot.wheels import WheelInput
@@ -423,27 +424,31 @@ class SkidModel:
         wrench: np.ndarray | None = None,
         load_transfer: bool = True,
     ) -> tuple[np.ndarray, np.ndarray]:
-        """Fixed-step run from 0 to `t_end_s`; `omega_of_t(t0, t1)` gives the mean wheel speed on a
-        step, or a `WheelInput` its exact travel over each step (`WheelInput.step_speeds`, every
-        step's at once: per-step lookups were a fifth of a calibration's time).
+        """Fixed-step run from 0 to `t_end_s` of `step` after `step`, in one compiled loop
+        (`skid_run.run_fixed`, the same floats); `omega_of_t(t0, t1)` gives the mean wheel speed
+        on a step, or a `WheelInput` its exact travel over each step (`WheelInput.step_speeds`,
+        every step's at once).
 
         With `load_transfer`, each step's wheel loads follow the previous step's acceleration.
         Returns times (k+1,) and states (k+1, n, 6).
         """
         n_steps = int(np.ceil(t_end_s / dt_s - 1e-9))
         times = np.minimum(np.arange(n_steps + 1) * dt_s, t_end_s)
-        state = np.atleast_2d(np.asarray(state0, dtype=np.float64)).copy()
-        states = np.empty((n_steps + 1, *state.shape))
+        state = np.atleast_2d(np.asarray(state0, dtype=np.float64))
+        n = state.shape[0]
+        states = np.empty((n_steps + 1, n, 6))
         states[0] = state
-        accel = None
-        table = omega_of_t.step_speeds(times) if isinstance(omega_of_t, WheelInput) else None
-        for k in range(n_steps):
-            h = times[k + 1] - times[k]
-            omega = table[k] if table is not None else omega_of_t(times[k], times[k + 1])
-            new = self.step(state, omega, c, h, wrench, ground_accel_mps2=accel)
-            if load_transfer:
-                accel = self.ground_accel(state, new, h, wrench)
-            state = states[k + 1] = new
+        if isinstance(omega_of_t, WheelInput):
+            table = omega_of_t.step_speeds(times)[:, None, :]
+        else:
+            each = [np.reshape(omega_of_t(times[k], times[k + 1]), (-1, 2)) for k in range(n_steps)]
+            table = np.array(each).reshape(n_steps, -1, 2) if each else np.zeros((0, n, 2))
+        omega = np.ascontiguousarray(np.broadcast_to(table, (n_steps, n, 2)), dtype=np.float64)
+        coef = np.array([np.broadcast_to(_flat(c, name), (n,)) for name in skid_run.COEFFICIENT_NAMES])
+        ext = np.zeros((n, 3)) if wrench is None else np.array(np.broadcast_to(wrench, (n, 3)), float)
+        skid_run.run_fixed(
+            states, omega, times, coef, skid_run.constants(self), ext, wrench is not None, load_transfer
+        )
         return times, states
 
     def simulate_adaptive(

@@ -290,6 +290,50 @@ def test_a_wheel_input_drives_a_fixed_step_run_as_its_per_step_travel_does() -> 
     assert np.ptp(looked_up[:, 0, 2]) > 0.3  # it turned: the loads shifted side to side
 
 
+def _step_by_step(model, state0, wheels, c, t_end_s, dt_s, wrench, load_transfer):
+    """`simulate_fixed` as it was written before it was compiled: `step` after `step`."""
+    n_steps = int(np.ceil(t_end_s / dt_s - 1e-9))
+    times = np.minimum(np.arange(n_steps + 1) * dt_s, t_end_s)
+    table = wheels.step_speeds(times)
+    states = [np.array(state0, dtype=np.float64)]
+    accel = None
+    for k in range(n_steps):
+        h = times[k + 1] - times[k]
+        new = model.step(states[-1], table[k], c, h, wrench, ground_accel_mps2=accel)
+        if load_transfer:
+            accel = model.ground_accel(states[-1], new, h, wrench)
+        states.append(new)
+    return times, np.array(states)
+
+
+@pytest.mark.parametrize("com", [(0.0, 0.0), (-0.05, 0.0), (0.03, -0.02)], ids=["centred", "rear", "off"])
+@pytest.mark.parametrize("load_transfer", [True, False], ids=["transfer", "static"])
+@pytest.mark.parametrize("pushed", [False, True], ids=["free", "wrench"])
+def test_the_compiled_fixed_step_run_is_step_after_step(com, load_transfer, pushed) -> None:
+    """`simulate_fixed` (one compiled loop, `skid_run`) gives the states `step` gives called step
+    after step: every terrain of the library at once, on centred and off-centre robots, with and
+    without load transfer and an external wrench. Float for float where numpy's expm1 is libm's
+    (its SIMD one, on some processors, differs in the last bit now and then)."""
+    model = SkidModel(replace(ROBOT, com_x_m=com[0], com_y_m=com[1]))
+    modes = list(LIB.values())
+    c = coeffs_for(modes)
+    s0 = np.zeros((len(modes), 6))
+    s0[:, 2] = np.linspace(-1.0, 1.0, len(modes))
+    s0[:, 3] = 0.2
+    t = np.linspace(0.0, 5.0, 501)
+    wheels = WheelInput.from_speeds(t, 4.0 + 3.0 * np.sin(1.3 * t), 4.0 - 5.0 * np.cos(0.7 * t))
+    wrench = np.array([1.5, -0.7, 0.3]) if pushed else None
+    t_a, compiled = model.simulate_fixed(s0, wheels, c, 4.993, 0.01, wrench, load_transfer)
+    t_b, stepped = _step_by_step(model, s0, wheels, c, 4.993, 0.01, wrench, load_transfer)
+    assert np.array_equal(t_a, t_b)
+    x = -np.geomspace(1e-6, 50.0, 20_001)
+    if np.array_equal(np.expm1(x), [math.expm1(v) for v in x]):
+        assert np.array_equal(compiled, stepped)
+    else:
+        np.testing.assert_allclose(compiled, stepped, rtol=1e-9, atol=1e-12)
+    assert np.ptp(stepped[:, :, 2]) > 1.0  # it turned
+
+
 def test_deep_water_has_no_traction_but_drags() -> None:
     model = SkidModel(ROBOT)
     c = coeffs_for(LIB["deep_water"])
