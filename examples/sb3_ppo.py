@@ -26,6 +26,7 @@ import numpy as np
 import supersuit as ss
 import torch
 from stable_baselines3 import PPO
+from stable_baselines3.common.logger import Logger
 from stable_baselines3.common.utils import set_random_seed
 from stable_baselines3.common.vec_env import VecEnv
 from task import evaluate, make_env, random_policy
@@ -55,6 +56,8 @@ def main(argv: list[str] | None = None) -> dict[str, float]:
         "MlpPolicy", venv, n_steps=N_STEPS, batch_size=256, n_epochs=4, learning_rate=3e-4,
         gamma=0.99, ent_coef=0.0, verbose=0, device="cpu",
     )  # fmt: skip
+    # a logger that writes nowhere: SB3's default makes an empty /tmp/SB3-<time> folder every run
+    model.set_logger(Logger(folder=None, output_formats=[]))
     t0 = time.perf_counter()
     model.learn(total_timesteps=args.iterations * N_STEPS * venv.num_envs)
     train_s = time.perf_counter() - t0

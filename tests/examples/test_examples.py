@@ -9,6 +9,7 @@ import importlib.util
 import math
 import re
 import sys
+import tempfile
 from pathlib import Path
 from types import ModuleType
 
@@ -39,12 +40,18 @@ def _check(out: str, result: dict[str, float]) -> None:
 
 
 @pytest.mark.slow
-def test_sb3_example_trains_and_replays_from_its_seed(capsys: pytest.CaptureFixture[str]) -> None:
+def test_sb3_example_trains_and_replays_from_its_seed(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """...and leaves nothing behind: SB3's default logger made an empty SB3-<time> folder in the
+    temporary directory on every run."""
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
     sb3 = _load("sb3_ppo")
     args = ["--iterations", "1", "--copies", "2", "--episodes", "2", "--seed", "3"]
     first = sb3.main(args)
     _check(capsys.readouterr().out, first)
     assert sb3.main(args) == first, "same seed, same training, same returns"
+    assert not list(tmp_path.glob("SB3-*"))
 
 
 @pytest.mark.slow
