@@ -165,7 +165,7 @@ def run_fixed(
 def constants(model) -> tuple:
     """`run_fixed`'s robot tuple for a `SkidModel`, each number computed as `SkidModel` does."""
     rb = model.robot
-    y_left, y_right, x_front, x_rear = model._arms
+    (y_left, y_right), (x_front, x_rear) = rb.contact_y_m, rb.contact_x_m
     (front, rear), (left, right) = rb.static_load_shares
     return (
         float(rb.mass_kg), float(rb.yaw_inertia_kgm2), y_left, y_right, x_front, x_rear,
