@@ -13,6 +13,7 @@ own run's arrays alone.
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numba
 import numpy as np
@@ -20,7 +21,7 @@ from scipy.spatial import cKDTree
 
 from swarm.sim.control import to_body
 from swarm.sim.layout import ELEVATION_CLIP_M, ROLES, ObservationLayout
-from swarm.sim.physics_kernels import cell_index
+from swarm.sim.physics_kernels import cell_index, cell_index_inside
 from swarm.sim.runview import FOLLOW, RETURN
 from swarm.sim.setup import MissionSetup
 
@@ -30,6 +31,17 @@ DENSE_NEAREST_PAIRS = 2_000_000
 #: Up to this many robots on the map, a run's neighbour table comes from every pair (fewer
 #: steps than building a k-d tree, and no Python call per run's robots).
 BRUTE_NEAREST_ROBOTS = 256
+
+
+class OpenObjects(NamedTuple):
+    """The objects found and not yet marked of some runs of a batch, as `_observe_objects` looks
+    for the nearest: every pair for the runs with few, a k-d tree for those with many."""
+
+    dense: np.ndarray  # places in the runs observed of the runs with few (every pair looked at)
+    objs: np.ndarray  # (objects, 2) their objects, run after run
+    open_: np.ndarray  # (objects,) which are still open
+    starts: np.ndarray  # where each of those runs' objects begin (one more than the runs)
+    many: list[int]  # places of the runs with many (a k-d tree each)
 
 
 class Observer:
@@ -56,8 +68,8 @@ class Observer:
         #: (runs,) the radio update each run's table is of; (runs, n) who was on the map then.
         self._table_version = np.full(runs, -1, dtype=np.int64)
         self._table_on = np.zeros((runs, self.n), bool)
-        #: `_open_objects`' last answer: (world, runs, their `objects_version`, the answer).
-        self._objects_cache: tuple | None = None
+        #: `_open_objects`' last answer, the world and runs it is for, and their `objects_version`.
+        self._objects_cache: tuple[object, list[int], np.ndarray, OpenObjects] | None = None
 
     def reset_run(self, b: int) -> None:
         """Forget run b's neighbour tables (a new episode)."""
@@ -144,21 +156,22 @@ class Observer:
         """Body-frame offset to the nearest object found and not yet marked: every pair looked at
         for the runs whose objects are few (all of them in one pass), a k-d tree where many."""
         n = self.n
-        dense, objs, open_, starts, many = self._open_objects(world, runs)
-        for j in many:
+        found = self._open_objects(world, runs)
+        for j in found.many:
             run = world.runs[runs[j]]
-            found = run.objects_m[run.object_marker < 0]
+            objs = run.objects_m[run.object_marker < 0]
             xy = run.robot_state[:, :2]
-            near = cKDTree(found).query(xy)[1]
-            block[j * n : (j + 1) * n] = to_body(found[near] - xy, run.robot_state[:, 2])
-        if len(dense):
-            picked = np.asarray(runs, np.intp)[dense]
-            _nearest_open(world.robot_state, picked, dense * n, objs, open_, starts, block)
+            near = cKDTree(objs).query(xy)[1]
+            block[j * n : (j + 1) * n] = to_body(objs[near] - xy, run.robot_state[:, 2])
+        if len(found.dense):
+            picked = np.asarray(runs, np.intp)[found.dense]
+            _nearest_open(
+                world.robot_state, picked, found.dense * n, found.objs, found.open_, found.starts, block
+            )
 
-    def _open_objects(self, world, runs: list[int]) -> tuple:
-        """For `_observe_objects`: the places in `runs` of the runs with few objects open, their
-        objects, which are open and where each run's begin; the places of the runs with many.
-        Made again only when a run's objects or markers have changed (`World.objects_version`)."""
+    def _open_objects(self, world, runs: list[int]) -> OpenObjects:
+        """For `_observe_objects`, made again only when a run's objects or markers have changed
+        (`World.objects_version`)."""
         versions = world.objects_version[runs]
         cached = self._objects_cache
         same = cached is not None and cached[0] is world and cached[1] == runs
@@ -174,7 +187,7 @@ class Observer:
         objs = np.concatenate([run.objects_m for run in picked]) if picked else np.empty((0, 2))
         open_ = np.concatenate([run.object_marker < 0 for run in picked]) if picked else np.empty(0, bool)
         starts = np.cumsum([0] + [len(run.objects_m) for run in picked])
-        found = (np.asarray(dense, np.intp), objs, open_, starts, many)
+        found = OpenObjects(np.asarray(dense, np.intp), objs, open_, starts, many)
         self._objects_cache = (world, list(runs), versions, found)
         return found
 
@@ -220,8 +233,8 @@ def _fill(
             for q in range(k2):
                 px = x + c * fx[q] - s * fy[q]
                 py = y + s * fx[q] + c * fy[q]
-                if inside:  # `cell_index` without its clamps, which cannot bind here
-                    cell = int((py - origin_y) * inv_cell) * grid_cols + int((px - origin_x) * inv_cell)
+                if inside:
+                    cell = cell_index_inside(px, py, origin_x, origin_y, inv_cell, grid_cols)
                 else:
                     cell = cell_index(px, py, origin_x, origin_y, inv_cell, grid_rows, grid_cols)
                 line[patch_at + q] = grid[cell, 0]

@@ -137,6 +137,12 @@ def cell_index(x: float, y: float, x0: float, y0: float, inv_cell: float, rows: 
 
 
 @njit(cache=True, error_model="numpy")
+def cell_index_inside(x: float, y: float, x0: float, y0: float, inv_cell: float, cols: int) -> int:
+    """`cell_index` of a point known to lie on the grid, where its clamps cannot bind."""
+    return int((y - y0) * inv_cell) * cols + int((x - x0) * inv_cell)
+
+
+@njit(cache=True, error_model="numpy")
 def wave_table(
     t_s: np.ndarray, phase_s: np.ndarray, period_s: float, skew: float, dt_s: float, n_sub: int
 ) -> tuple[np.ndarray, np.ndarray]:
