@@ -12,6 +12,7 @@ import signal
 import subprocess
 import sys
 import time
+from collections.abc import Iterator
 from pathlib import Path
 
 import pyarrow as pa
@@ -77,6 +78,18 @@ def reference(tiny, tmp_path_factory) -> tuple[StudySpec, pa.Table]:
     spec = StudySpec(str(tiny), runs=5, sweeps=parse_sweeps(["swarm.count=2,3"]), seed=7)
     table, _ = run_study(spec, tmp_path_factory.mktemp("reference"), workers=1)
     return spec, table
+
+
+@pytest.fixture(scope="module")
+def local_ray() -> Iterator[None]:
+    """One local Ray instance for this module's in-process Ray studies: `run_study` uses Ray when
+    it is already running and leaves it running, so each test does not pay Ray's start and stop
+    (some 8 s of a 13 s test here). The killed-worker test kills a worker, which Ray replaces."""
+    pytest.importorskip("ray")  # the `ray` extra; CI installs it
+    started = backends.start_ray(2, None)
+    yield
+    if started:
+        backends.stop_ray()
 
 
 def test_run_seeds_come_from_the_study_seed_and_the_runs_place() -> None:
@@ -201,16 +214,14 @@ def test_batches_hold_runs_of_one_point_up_to_their_size(tiny) -> None:
 
 
 @pytest.mark.slow
-def test_the_ray_backend_gives_the_same_table_in_batches(reference, tmp_path) -> None:
-    pytest.importorskip("ray")  # the `ray` extra; CI installs it
+def test_the_ray_backend_gives_the_same_table_in_batches(reference, local_ray, tmp_path) -> None:
     spec, table = reference
     batched, _ = run_study(spec, tmp_path / "ray", backend="ray", workers=2, batch=2)
     assert _stable(batched).equals(_stable(table))
 
 
 @pytest.mark.slow
-def test_the_ray_backend_gives_the_same_table(reference, tmp_path) -> None:
-    pytest.importorskip("ray")  # the `ray` extra; CI installs it
+def test_the_ray_backend_gives_the_same_table(reference, local_ray, tmp_path) -> None:
     spec, expected = reference
     table, summary = run_study(spec, tmp_path / "ray", backend="ray", workers=2)
     assert summary["backend"] == "ray"
@@ -530,9 +541,8 @@ def _descendants(pid: int) -> set[int]:
 
 
 @pytest.mark.slow
-def test_a_ray_worker_killed_mid_study_is_retried_to_the_same_table(reference, tmp_path) -> None:
+def test_a_ray_worker_killed_mid_study_is_retried_to_the_same_table(reference, local_ray, tmp_path) -> None:
     """kill -9 the Ray worker running a run: Ray runs it again and the table is the same."""
-    pytest.importorskip("ray")  # the `ray` extra; CI installs it
     import threading
 
     spec, expected = reference
