@@ -34,6 +34,18 @@ CAUSE_MARKERS = {
     "surf_timeout": ">",
     "blast": "h",
 }
+#: Scatter area against the nominal one, for markers whose thin arms the white edge all but
+#: covers at map sizes: matplotlib's star drew a twelfth of a square's ink at the study map's size.
+MARKER_AREA_SCALE = {"*": 3.0}
+
+
+def loss_marker(cause: str, area: float) -> tuple[str, float]:
+    """A loss cause's marker and its scatter area (pt^2) for the nominal `area`, so that every
+    cause's marks carry about as much ink as the others' (a legend's `ms` is the root of it)."""
+    marker = CAUSE_MARKERS.get(cause, "o")
+    return marker, area * MARKER_AREA_SCALE.get(marker, 1.0)
+
+
 #: Robot states over time: the phases of `swarm.sim.layout.PHASES`, then how robots ended.
 PHASE_COLOURS = {
     "waiting": "#DDDDDD",
@@ -85,9 +97,10 @@ def _loss_markers(ax, log: MissionLog, size: float = 60.0) -> list:
         by_cause.setdefault(x["cause"], []).append((x["x_m"], x["y_m"]))
     for cause, pts in sorted(by_cause.items()):
         xy = np.array(pts)
-        colour, marker = cause_colour(cause, extra), CAUSE_MARKERS.get(cause, "o")
+        colour = cause_colour(cause, extra)
+        marker, area = loss_marker(cause, size)
         ax.scatter(
-            xy[:, 0], xy[:, 1], s=size, marker=marker, c=colour, edgecolors="white", linewidths=0.8, zorder=12
+            xy[:, 0], xy[:, 1], s=area, marker=marker, c=colour, edgecolors="white", linewidths=0.8, zorder=12
         )
         handles.append(
             Line2D(
@@ -95,7 +108,7 @@ def _loss_markers(ax, log: MissionLog, size: float = 60.0) -> list:
                 [],
                 ls="",
                 marker=marker,
-                ms=7,
+                ms=loss_marker(cause, 49.0)[1] ** 0.5,
                 color=colour,
                 mec="white",
                 label=f"lost: {as_words(cause)} ({len(pts)})",

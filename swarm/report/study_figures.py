@@ -22,7 +22,7 @@ from matplotlib.lines import Line2D
 from matplotlib.ticker import MaxNLocator
 
 from swarm.report.map_figure import map_axes
-from swarm.report.sim_figures import CAUSE_MARKERS
+from swarm.report.sim_figures import loss_marker
 from swarm.report.style import OKABE_ITO, as_words, new_figure, plt, png_bytes
 from swarm.sim.hazards import CAUSES
 from swarm.sim.layout import PHASES
@@ -331,7 +331,7 @@ def loss_bin_m(beach_map: BeachMap) -> float:
 
 def loss_map_png(table: pa.Table, beach_map: BeachMap | None) -> bytes | None:
     """Where robots were lost over all runs: a 2D histogram over the map (empty cells transparent)
-    and, when there are few, a marker per loss by cause (`CAUSE_MARKERS`, as the simulation report);
+    and, when there are few, a marker per loss by cause (`loss_marker`, as the simulation report);
     None without a map or without losses."""
     x, y, cause = loss_points(table)
     if beach_map is None or not len(x):
@@ -362,9 +362,16 @@ def loss_map_png(table: pa.Table, beach_map: BeachMap | None) -> bytes | None:
         for c in ordered_causes(list(set(cause))):
             mask = cause == c
             colour = cause_colour(c, extra)
-            marker = CAUSE_MARKERS.get(c, "o")
+            marker, area = loss_marker(c, 22.0)
             ax.scatter(
-                x[mask], y[mask], s=22, marker=marker, c=colour, edgecolors="white", linewidths=0.5, zorder=10
+                x[mask],
+                y[mask],
+                s=area,
+                marker=marker,
+                c=colour,
+                edgecolors="white",
+                linewidths=0.5,
+                zorder=10,
             )
             handles.append(
                 Line2D(
@@ -372,7 +379,7 @@ def loss_map_png(table: pa.Table, beach_map: BeachMap | None) -> bytes | None:
                     [],
                     ls="",
                     marker=marker,
-                    ms=5,
+                    ms=loss_marker(c, 25.0)[1] ** 0.5,
                     color=colour,
                     mec="white",
                     label=f"lost: {as_words(c)}",
