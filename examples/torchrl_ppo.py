@@ -96,8 +96,15 @@ def main(argv: list[str] | None = None) -> dict[str, float]:
     )
     loss.make_value_estimator(ValueEstimators.GAE, gamma=0.99, lmbda=0.95)
     optim = torch.optim.Adam(loss.parameters(), lr=3e-4)
+    # the policy is a plain MLP with no recurrent state to reset, so the env needs no InitTracker
+    # (TorchRL 0.14 warns that it lacks one whatever the policy, and from 0.15 would append it)
     collector = Collector(
-        env, actor, frames_per_batch=FRAMES, total_frames=FRAMES * args.iterations, device="cpu"
+        env,
+        actor,
+        frames_per_batch=FRAMES,
+        total_frames=FRAMES * args.iterations,
+        device="cpu",
+        auto_register_policy_transforms=False,
     )
 
     t0 = time.perf_counter()
