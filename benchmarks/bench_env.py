@@ -37,7 +37,8 @@ against this code, alternately `--repeat` times (issue 13: no slower than today 
 Then (unless --no-breakdown), where our step's time goes at 100 robots and at the largest count:
 timers wrapped around the environment's internals for a separate run (so they do not slow the rates
 above).
-`--profile` prints cProfile's top functions for that run instead of the timers.
+`--profile` prints cProfile's top functions for that run instead of the timers; with
+`--vector-only`, those of the vector env at each `--batches` size (by own time: the kernels).
 """
 
 from __future__ import annotations
@@ -456,6 +457,34 @@ def breakdown(n: int, steps: int, seed: int, profile: bool) -> str:
     return "\n".join(lines)
 
 
+def batch_spec(text: str) -> tuple[int, int]:
+    """`--batches` item RUNSxROBOTS, e.g. 10x1000: (runs, robots)."""
+    runs, sep, robots = text.lower().partition("x")
+    if not (sep and runs.isdigit() and robots.isdigit() and int(runs) > 0 and int(robots) > 0):
+        raise argparse.ArgumentTypeError(f"found {text!r}, expected RUNSxROBOTS, e.g. 10x1000")
+    return int(runs), int(robots)
+
+
+def vector_profile(b: int, n: int, steps: int, warmup: int, seed: int) -> str:
+    """cProfile's top functions by own time over `steps` steps of `vector_env` with b runs of n
+    robots (`--profile --vector-only`): the batched core's kernels by name."""
+    vec = swarm.sim.vector_env(
+        mission=MISSION, num_envs=b, overrides={"swarm.count": n}, action_mode="wheels", seed=0
+    )
+    vec.reset()
+    actions = np.random.default_rng(seed).uniform(-1.0, 1.0, (20, b, n, 3)).astype(np.float32)
+    for k in range(warmup):
+        vec.step(actions[k % len(actions)])
+    pr = cProfile.Profile()
+    pr.enable()
+    for k in range(steps):
+        vec.step(actions[(warmup + k) % len(actions)])
+    pr.disable()
+    out = io.StringIO()
+    pstats.Stats(pr, stream=out).sort_stats("tottime").print_stats(25)
+    return f"vector_env {b} x {n}, {steps} steps, by own time:\n{out.getvalue()}"
+
+
 def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--counts", type=int, nargs="+", default=[10, 100, 1000])
@@ -466,7 +495,12 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--no-breakdown", action="store_true")
     ap.add_argument("--profile", action="store_true", help="cProfile instead of the timers")
     ap.add_argument(
-        "--batches", nargs="+", default=["1000x10", "100x100", "10x1000"], help="vector_env runs x robots"
+        "--batches",
+        nargs="+",
+        type=batch_spec,
+        default=[(1000, 10), (100, 100), (10, 1000)],
+        metavar="RUNSxROBOTS",
+        help="vector_env runs x robots (default 1000x10 100x100 10x1000)",
     )
     ap.add_argument("--vector-only", action="store_true", help="only the vector env table (no MPE)")
     ap.add_argument("--today-ref", help="also the vector env of this git commit (today's)")
@@ -486,7 +520,7 @@ def main(argv: list[str] | None = None) -> None:
                 "bench_env: the MPE peer needs the bench extra (pip install '.[bench]'); "
                 "--vector-only runs without it"
             ) from None
-    batches = [tuple(int(v) for v in spec.lower().split("x")) for spec in args.batches]
+    batches = args.batches
 
     print(
         f"python {platform.python_version()}, numpy {np.__version__}, {os.cpu_count()} cpus; "
@@ -503,7 +537,7 @@ def main(argv: list[str] | None = None) -> None:
         return
     if batches:
         vector_table(
-            batches,  # type: ignore[arg-type]
+            batches,
             args.steps,
             args.warmup,
             args.box_s,
@@ -513,6 +547,9 @@ def main(argv: list[str] | None = None) -> None:
         )
         print()
     if args.vector_only:
+        if args.profile:
+            for b, n in batches:
+                print(vector_profile(b, n, min(args.steps, 100), args.warmup, args.seed))
         return
     header = (
         f"{'agents':>6} | {'ours steps':>10} {'ours agent-steps/s':>18} {'ms/step':>8} | "
