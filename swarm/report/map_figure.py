@@ -13,6 +13,7 @@ from matplotlib.colors import BoundaryNorm, ListedColormap
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 from matplotlib.ticker import MaxNLocator
+from shapely.geometry import Point
 from shapely.geometry.base import BaseGeometry
 from shapely.plotting import patch_from_polygon
 
@@ -51,7 +52,12 @@ def _parts(geom: BaseGeometry) -> list[BaseGeometry]:
 
 
 def _draw_region(
-    ax, name: str, kind: str, geom: BaseGeometry, bounds: tuple[float, float, float, float]
+    ax,
+    name: str,
+    kind: str,
+    geom: BaseGeometry,
+    bounds: tuple[float, float, float, float],
+    others: Sequence[BaseGeometry] = (),
 ) -> object:
     colour, style, marker = REGION_STYLES.get(kind, ("#000000", "-", "o"))
     handle: object = None
@@ -97,12 +103,13 @@ def _draw_region(
     # names sit by the shape, inside the map: below the point or top edge when near the map's top
     near_top = geom.bounds[3] > bounds[3] - 0.08 * (bounds[3] - bounds[1])
     dy, va = (-3, "top") if near_top else (3, "bottom")
-    if geom.geom_type in ("Polygon", "MultiPolygon"):  # at the top-left corner, clear of what it holds
-        xy, offset = (geom.bounds[0], geom.bounds[3]), (2, dy)
+    ha = "left"
+    if geom.geom_type in ("Polygon", "MultiPolygon"):
+        xy, ha = _label_corner(geom, others)
+        offset = (-2 if ha == "right" else 2, dy)
     else:
         at = geom.representative_point()
         xy, offset = (at.x, at.y), (7, 2 * dy)
-    ha = "left"
     ax.annotate(
         name,
         xy,
@@ -115,6 +122,19 @@ def _draw_region(
         path_effects=_TEXT_HALO,
     )
     return handle
+
+
+def _label_corner(geom: BaseGeometry, others: Sequence[BaseGeometry]) -> tuple[tuple[float, float], str]:
+    """Where an area's name goes: its top-left corner, clear of what it holds, unless that corner
+    lies in another area that does not hold this one (the name would read as that area's:
+    gentle_fine's search area starts inside the dunes' keep-out), then its top-right one,
+    right-aligned; (corner, alignment). A landing zone inside a search area keeps its top-left."""
+    areas = [o for o in others if o.geom_type in ("Polygon", "MultiPolygon") and not o.covers(geom)]
+    x0, _, x1, y1 = geom.bounds
+    for corner, ha in (((x0, y1), "left"), ((x1, y1), "right")):
+        if not any(o.covers(Point(corner)) for o in areas):
+            return corner, ha
+    return (x0, y1), "left"
 
 
 def _contours(ax, beach_map: BeachMap) -> None:
@@ -204,8 +224,10 @@ def plot_map(
         zorder=1,
     )
     _contours(ax, beach_map)
-    for region in beach_map.regions.values():
-        handle = _draw_region(ax, region.name, region.kind, region.geometry, beach_map.bounds_m)
+    regions = list(beach_map.regions.values())
+    for region in regions:
+        others = [r.geometry for r in regions if r is not region]
+        handle = _draw_region(ax, region.name, region.kind, region.geometry, beach_map.bounds_m, others)
         if handle is not None:
             kinds.setdefault(region.kind, handle)
 

@@ -390,3 +390,28 @@ def test_generate_cli_reproduces_the_shipped_river_map(tmp_path):
     assert np.array_equal(made.terrain, shipped.terrain)
     assert np.array_equal(made.elevation_m, shipped.elevation_m)
     assert main(["map", "generate", "--rock-outcrops", "-1", "-o", str(tmp_path / "t.yaml")]) == 2
+
+
+def test_an_area_s_name_is_not_drawn_inside_another_area():
+    """gentle_fine's search area starts inside the dunes' keep-out, where its name, at its top-left
+    corner, read as the keep-out's; it moves to the top-right corner. Every area's name is anchored
+    at a corner of its own, where no other area is but one that holds it (the landing zones lie in
+    the search area)."""
+    import matplotlib.pyplot as plt
+
+    from swarm.report.map_figure import plot_map
+
+    beach_map = load_map(Path(__file__).resolve().parents[2] / "maps" / "gentle_fine.yaml")
+    fig, ax = plt.subplots()
+    plot_map(beach_map, None, ax=ax)
+    areas = {r.name: r.geometry for r in beach_map.regions.values() if r.geometry.geom_type == "Polygon"}
+    assert {"search_beach", "keep_out_dunes"} <= set(areas)
+    anchors = {t.get_text(): Point(t.xy) for t in ax.texts if t.get_text() in areas}
+    assert set(anchors) == set(areas)
+    for name, at in anchors.items():
+        x0, _, x1, y1 = areas[name].bounds
+        assert at.y == y1 and at.x in (x0, x1), name
+        others = [o for o, g in areas.items() if o != name and g.covers(at) and not g.covers(areas[name])]
+        assert not others, (name, others)
+    assert anchors["search_beach"].x == areas["search_beach"].bounds[2]
+    plt.close(fig)
