@@ -118,7 +118,7 @@ def _draw_region(
         ha=ha,
         va=va,
         fontsize=7.5,
-        zorder=7,
+        zorder=9.5,  # over the paths a report draws (9), under its links and markers (10 and up)
         path_effects=_TEXT_HALO,
     )
     return handle
