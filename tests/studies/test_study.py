@@ -437,6 +437,31 @@ def test_plan_evaluate_puts_the_simulations_beside_the_plan(tmp_path, capsys) ->
     assert "The plan in simulation" in (tmp_path / "again.md").read_text()
 
 
+@pytest.mark.slow
+def test_plan_evaluate_prints_the_detection_beside_the_plan_s(tmp_path, capsys) -> None:
+    """A search's promise is its detection: `swarm plan --evaluate N` prints the simulated runs'
+    mean detection beside the plan's expected detection after its losses (plan.json's budget)."""
+    search = {
+        "type": "search",
+        "area": "search_beach",
+        "sensor": {"model": "inverse_cube", "sweep_width_m": 4.0},
+    }
+    mission = _mission(
+        tmp_path,
+        "searched",
+        tasks=[search],
+        success={"min_detection_fraction": 0.5},
+        hazards={**QUIET, "attrition": {"mtbf_h": 0.25}, "mines": {"count": 20, "trigger_probability": 0.0}},
+    )
+    out = tmp_path / "plan"
+    assert main(["plan", str(mission), "--evaluate", "3", "--workers", "1", "--out", str(out)]) == 0
+    printed = capsys.readouterr().out
+    found = json.loads((out / "evaluation.json").read_text())["detection"]["mean"]
+    (planned,) = json.loads((out / "plan.json").read_text())["budget"]["search"].values()
+    line = next(x for x in printed.splitlines() if "in simulation" in x)
+    assert f"detection {found:.1%} a run (plan {planned['expected_detection_after_losses']:.1%})" in line
+
+
 def test_planning_again_into_a_folder_replaces_its_evaluation(tmp_path, capsys) -> None:
     """Another plan into the same folder: its evaluation is its own (a refusal to resume the old
     plan's runs came after the new plan.json, and a report then mixed the two); without
