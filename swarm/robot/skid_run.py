@@ -6,7 +6,8 @@ a step, about 300 us, nearly all of it per-call cost. This loop does the same ar
 robot, operation for operation in numpy's order (no fast math, so no fused multiply-adds), with
 libm's expm1, cos and sin where numpy calls them, so a run gives the floats `step` gives
 (`tests/robot/test_models.py` pins it). The simulator's `physics_kernels` solves the same 3x3
-system for its swarm, without load transfer, in a loop kept apart so that LLVM vectorizes it.
+system (`implicit_velocities`) for its swarm, without load transfer, in a loop of its own that LLVM
+vectorizes.
 """
 
 from __future__ import annotations
@@ -123,28 +124,15 @@ def run_fixed(
             # `SkidModel.step`: the 3x3 linearly implicit velocity update, then the pose
             kx0, kx1 = kx_side0 + k_roll0, kx_side1 + k_roll1
             drive0, drive1 = kx_side0 * w0, kx_side1 * w1
-            a11 = m / dt + (kx0 + kx1) + lin
-            a22 = m / dt + (ky0 + ky1) + lin
-            a13 = -(y_left * kx0 + y_right * kx1)
-            a23 = x_front * ky0 + x_rear * ky1
-            a33 = (
-                inertia / dt
-                + x_front * x_front * ky0
-                + x_rear * x_rear * ky1
-                + y_left * y_left * kx0
-                + y_right * y_right * kx1
-                + yaw
-                + k_spin
-            )
             b1 = m * (u / dt + v * r) + drive0 + drive1
             b2 = m * (v / dt - u * r)
             b3 = inertia / dt * r - (y_left * drive0 + y_right * drive1)
             if has_wrench:
                 b1, b2, b3 = b1 + wrench[i, 0], b2 + wrench[i, 1], b3 + wrench[i, 2]
-            e1, e2 = a13 / a11, a23 / a22
-            r_new = (b3 - e1 * b1 - e2 * b2) / (a33 - e1 * a13 - e2 * a23)
-            u_new = (b1 - a13 * r_new) / a11
-            v_new = (b2 - a23 * r_new) / a22
+            u_new, v_new, r_new = implicit_velocities(
+                m / dt, inertia / dt, kx0, kx1, ky0, ky1, lin, yaw, k_spin,
+                y_left, y_right, x_front, x_rear, b1, b2, b3,
+            )  # fmt: skip
             mid = th + 0.5 * dt * r_new
             cos_h, sin_h = math.cos(mid), math.sin(mid)
             states[j + 1, i, 0] = x + dt * (u_new * cos_h - v_new * sin_h)
@@ -160,6 +148,48 @@ def run_fixed(
                     acc_x -= wrench[i, 0] / m
                     acc_y -= wrench[i, 1] / m
                 shifted = True
+
+
+@njit(cache=True, error_model="numpy")
+def implicit_velocities(
+    m_h: float,
+    i_h: float,
+    kx0: float,
+    kx1: float,
+    ky0: float,
+    ky1: float,
+    lin: float,
+    yaw: float,
+    k_spin: float,
+    y_left: float,
+    y_right: float,
+    x_front: float,
+    x_rear: float,
+    b1: float,
+    b2: float,
+    b3: float,
+) -> tuple[float, float, float]:
+    """(u, v, r) after a linearly implicit step of `SkidModel.step`: the 3x3 system of mass over
+    the step `m_h` and yaw inertia over it `i_h`, the sides' longitudinal and the axles' lateral
+    slopes (kx, ky), the hull's linear and yaw drag (`lin`, `yaw`) and the patches' spin `k_spin`, with
+    right-hand side b, eliminated in closed form in `step`'s order (so the same floats). Shared
+    with the simulator's `physics_kernels`, whose pass LLVM still vectorizes with it inlined."""
+    a11 = m_h + (kx0 + kx1) + lin
+    a22 = m_h + (ky0 + ky1) + lin
+    a13 = -(y_left * kx0 + y_right * kx1)
+    a23 = x_front * ky0 + x_rear * ky1
+    a33 = (
+        i_h
+        + x_front * x_front * ky0
+        + x_rear * x_rear * ky1
+        + y_left * y_left * kx0
+        + y_right * y_right * kx1
+        + yaw
+        + k_spin
+    )
+    e1, e2 = a13 / a11, a23 / a22
+    r_new = (b3 - e1 * b1 - e2 * b2) / (a33 - e1 * a13 - e2 * a23)
+    return (b1 - a13 * r_new) / a11, (b2 - a23 * r_new) / a22, r_new
 
 
 def constants(model) -> tuple:

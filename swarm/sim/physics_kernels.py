@@ -28,6 +28,7 @@ from numba import njit
 
 from swarm.robot.params import GRAVITY_MPS2
 from swarm.robot.skid import SkidModel
+from swarm.robot.skid_run import implicit_velocities
 from swarm.robot.terrain import COEFFICIENTS
 
 # Columns of the per-class table: `COEFFICIENTS` in order, then buoyancy_fraction^1.5 (jet power).
@@ -339,27 +340,13 @@ def _velocities_pass(h: float, work: np.ndarray, contacts: np.ndarray, rb: Robot
         kx0 = kx_side0 + work[_ROLL, i] / math.sqrt(vx0 * vx0 + reg * reg)
         kx1 = kx_side1 + work[_ROLL, i] / math.sqrt(vx1 * vx1 + reg * reg)
         d0, d1 = kx_side0 * w0, kx_side1 * w1
-        # the 3x3 system of the linearly implicit step, eliminated in closed form
-        a11 = m_h + (kx0 + kx1) + lin
-        a22 = m_h + (ky0 + ky1) + lin
-        a13 = -(y_left * kx0 + y_right * kx1)
-        a23 = x_front * ky0 + x_rear * ky1
-        a33 = (
-            i_h
-            + x_front * x_front * ky0
-            + x_rear * x_rear * ky1
-            + y_left * y_left * kx0
-            + y_right * y_right * kx1
-            + yaw
-            + k_spin
-        )
         b1 = m * (u / h + v * r) + d0 + d1 + work[_FX, i]
         b2 = m * (v / h - u * r) + work[_FY, i]
         b3 = i_h * r - (y_left * d0 + y_right * d1) + 0.0
-        e1, e2 = a13 / a11, a23 / a22
-        r_new = (b3 - e1 * b1 - e2 * b2) / (a33 - e1 * a13 - e2 * a23)
-        u_new = (b1 - a13 * r_new) / a11
-        solved[_U_NEW, i], solved[_V_NEW, i], solved[_R_NEW, i] = u_new, (b2 - a23 * r_new) / a22, r_new
+        u_new, v_new, r_new = implicit_velocities(
+            m_h, i_h, kx0, kx1, ky0, ky1, lin, yaw, k_spin, y_left, y_right, x_front, x_rear, b1, b2, b3
+        )
+        solved[_U_NEW, i], solved[_V_NEW, i], solved[_R_NEW, i] = u_new, v_new, r_new
         solved[_TRACTION0, i] = kx_side0 * (w0 - (u_new - y_left * r_new))
         solved[_TRACTION1, i] = kx_side1 * (w1 - (u_new - y_right * r_new))
 
