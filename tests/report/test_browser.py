@@ -21,7 +21,8 @@ from PIL import Image, ImageStat
 from swarm.cli import main
 
 #: End-to-end: real reports, folders and processes (deselect with -m "not slow").
-pytestmark = pytest.mark.slow
+#: One core makes each kind's report once and keeps one Chromium (`scripts/test`'s loadgroup).
+pytestmark = [pytest.mark.slow, pytest.mark.xdist_group("browser")]
 
 
 ROOT = Path(__file__).resolve().parents[2]

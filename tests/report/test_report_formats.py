@@ -24,8 +24,9 @@ from swarm.report.document import seconds
 from swarm.report.load import detect
 from swarm.report.sim_report import format_value
 
-#: End-to-end: real reports, folders and processes (deselect with -m "not slow").
-pytestmark = pytest.mark.slow
+#: End-to-end: real reports, folders and processes (deselect with -m "not slow"); one core builds the
+#: module's folders once (`scripts/test`'s loadgroup: split over two cores, each built them all).
+pytestmark = [pytest.mark.slow, pytest.mark.xdist_group("report_formats")]
 
 
 REPO = Path(__file__).resolve().parents[2]

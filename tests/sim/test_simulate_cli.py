@@ -21,7 +21,8 @@ from swarm.report.sim_report import format_value
 from swarm.sim.run import MissionLog
 
 #: End-to-end: real reports, folders and processes (deselect with -m "not slow").
-pytestmark = pytest.mark.slow
+#: One core runs the module (`scripts/test`'s loadgroup), so `runs` simulates once.
+pytestmark = [pytest.mark.slow, pytest.mark.xdist_group("simulate_cli")]
 
 
 LOG_FILES = ("trajectories.npz", "events.jsonl", "outcome.json", "report.html", "report.md", "plan.json")

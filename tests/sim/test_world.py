@@ -19,6 +19,9 @@ from swarm.sim.runview import MARK, RunView
 from swarm.sim.setup import MissionSetup
 from swarm.sim.world import World
 
+#: One core runs the module (`scripts/test`'s loadgroup), so the runs alone (`alone`) are made once.
+pytestmark = pytest.mark.xdist_group("world")
+
 SHORT_RADIO = {"tx_power_dbm": 0.0, "rx_sensitivity_dbm": -70.0, "fade_margin_db": 3.0}
 #: Everything at once on the small beach: a landing, a search that marks what it finds and clears
 #: it together, a relay chain, losses from failures, breakers and mines, and the return to sea.

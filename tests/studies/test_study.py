@@ -80,6 +80,11 @@ def reference(tiny, tmp_path_factory) -> tuple[StudySpec, pa.Table]:
     return spec, table
 
 
+#: The Ray tests on one core (`scripts/test`'s loadgroup): one `local_ray` for them, and never two
+#: Rays starting at once on a two-core machine.
+RAY_GROUP = pytest.mark.xdist_group("ray")
+
+
 @pytest.fixture(scope="module")
 def local_ray() -> Iterator[None]:
     """One local Ray instance for this module's in-process Ray studies: `run_study` uses Ray when
@@ -214,6 +219,7 @@ def test_batches_hold_runs_of_one_point_up_to_their_size(tiny) -> None:
 
 
 @pytest.mark.slow
+@RAY_GROUP
 def test_the_ray_backend_gives_the_same_table_in_batches(reference, local_ray, tmp_path) -> None:
     spec, table = reference
     batched, _ = run_study(spec, tmp_path / "ray", backend="ray", workers=2, batch=2)
@@ -221,6 +227,7 @@ def test_the_ray_backend_gives_the_same_table_in_batches(reference, local_ray, t
 
 
 @pytest.mark.slow
+@RAY_GROUP
 def test_the_ray_backend_gives_the_same_table(reference, local_ray, tmp_path) -> None:
     spec, expected = reference
     table, summary = run_study(spec, tmp_path / "ray", backend="ray", workers=2)
@@ -229,6 +236,7 @@ def test_the_ray_backend_gives_the_same_table(reference, local_ray, tmp_path) ->
 
 
 @pytest.mark.slow
+@RAY_GROUP
 def test_the_ray_backend_starts_quietly(tiny, tmp_path) -> None:
     """`swarm study --backend ray` printed Ray's "Token authentication is enabled for this Ray
     cluster..." warning on a local start: stderr holds the progress bar and nothing else."""
@@ -566,6 +574,7 @@ def _descendants(pid: int) -> set[int]:
 
 
 @pytest.mark.slow
+@RAY_GROUP
 def test_a_ray_worker_killed_mid_study_is_retried_to_the_same_table(reference, local_ray, tmp_path) -> None:
     """kill -9 the Ray worker running a run: Ray runs it again and the table is the same."""
     import threading
