@@ -124,8 +124,9 @@ def _wheel_actions(env: SwarmEnv, steps: int, seed: int) -> list[dict[str, np.nd
     return [dict(zip(env.possible_agents, a[k], strict=True)) for k in range(steps)]
 
 
-def vector_rate(b: int, n: int, steps: int, warmup: int, box_s: float, seed: int) -> Rate:
-    """Agent-steps/s of `vector_env` with b runs of n robots (autoreset keeps every run going)."""
+def warmed_vector(b: int, n: int, steps: int, warmup: int, seed: int):
+    """`vector_env` with b runs of n robots after `warmup` steps, the random wheel actions drawn
+    beforehand for it (cycled), and its agent mask: what `vector_rate` and `vector_profile` time."""
     vec = swarm.sim.vector_env(
         mission=MISSION, num_envs=b, overrides={"swarm.count": n}, action_mode="wheels", seed=0
     )
@@ -135,6 +136,12 @@ def vector_rate(b: int, n: int, steps: int, warmup: int, box_s: float, seed: int
     mask = infos["agent_mask"]
     for k in range(warmup):
         mask = vec.step(actions[k % len(actions)])[4]["agent_mask"]
+    return vec, actions, mask
+
+
+def vector_rate(b: int, n: int, steps: int, warmup: int, box_s: float, seed: int) -> Rate:
+    """Agent-steps/s of `vector_env` with b runs of n robots (autoreset keeps every run going)."""
+    vec, actions, mask = warmed_vector(b, n, steps, warmup, seed)
     done, seconds, agent_steps = 0, 0.0, 0
     while done < steps and (done == 0 or seconds < box_s):
         live = int(mask.sum())
@@ -468,13 +475,7 @@ def batch_spec(text: str) -> tuple[int, int]:
 def vector_profile(b: int, n: int, steps: int, warmup: int, seed: int) -> str:
     """cProfile's top functions by own time over `steps` steps of `vector_env` with b runs of n
     robots (`--profile --vector-only`): the batched core's kernels by name."""
-    vec = swarm.sim.vector_env(
-        mission=MISSION, num_envs=b, overrides={"swarm.count": n}, action_mode="wheels", seed=0
-    )
-    vec.reset()
-    actions = np.random.default_rng(seed).uniform(-1.0, 1.0, (20, b, n, 3)).astype(np.float32)
-    for k in range(warmup):
-        vec.step(actions[k % len(actions)])
+    vec, actions, _ = warmed_vector(b, n, steps, warmup, seed)
     pr = cProfile.Profile()
     pr.enable()
     for k in range(steps):
