@@ -18,7 +18,10 @@ rates the simulator draws from (`swarm.sim.hazards`):
 - rock: damage_per_km per metre on rock, and hidden rocks met per metre on land (hidden_per_ha x
   twice the contact radius, as mines) x collision_damage_probability;
 - mine: mines met per metre (density x twice the trigger radius) x the chance the sensor has not
-  found the mine while the robot can still keep off it x trigger_probability. Inverse cube:
+  found the mine while the robot can still keep off it x trigger_probability, the metres counted
+  where mines can still be unfound (robots steer clear of those found): on a search lane, the share
+  the lanes swept before it have not found (`found_by_lanes_before`); on a trip to mark a mine,
+  after the search, the share it missed. Inverse cube:
   exp(-W^2 / (16 pi d^2)) for a mine dead ahead, at d = the trigger radius + one simulator step
   at the robot's speed (a mine found at the end of a step is steered clear of from the next,
   `REACTION_S`); a tabulated curve: 1 - p averaged over offsets within the trigger radius;
@@ -124,6 +127,9 @@ class Exposure:
     surf_s: float
     beach_s: float
     driven_m: dict[str, float] = field(default_factory=dict)
+    #: metres inside the mine area, each counted by the chance that the mines there are still
+    #: unfound when the robot drives it (a lane beside lanes swept before: `found_by_lanes_before`;
+    #: robots steer clear of the mines found)
     in_mine_area_m: float = 0.0
     #: -log(1 - p) of one breaker, averaged over the surf crossing (`surf_crossing`); None: every
     #: breaker at the offshore height
@@ -541,6 +547,25 @@ def _lattice_detection(model: str, width_m: float, d: np.ndarray, curve: Lateral
         return -np.expm1(-rate.sum(axis=1))
     p = lateral_range_p(curve, d) if curve is not None else (np.abs(d) <= width_m / 2.0).astype(np.float64)
     return 1.0 - np.prod(1.0 - p, axis=1)
+
+
+def found_by_lanes_before(
+    model: str, width_m: float, spacing_m: float, curve: LateralRange | None = None
+) -> float:
+    """Chance a mine under a lane of a boustrophedon has been found before its searcher gets there,
+    by the lanes it swept before: they lie on one side, S, 2S, ... away (each law as the simulator
+    draws it, `_lattice_detection`). Robots steer clear of what has been found, so only the rest
+    can go off under them (mine_clear's lanes, 1.92 m apart for a 3 m inverse-cube sweep width:
+    27%). 0 for random search, whose tracks are not lanes."""
+    if model in ("random", "random_search") or spacing_m <= 0.0:
+        return 0.0
+    if model == "inverse_cube" and curve is None:
+        lanes = 60  # the rate falls as 1/x^2: beyond 60 lanes it adds under W^2 / (240 pi S^2)
+    else:
+        reach = float(curve.range_m[-1]) if curve is not None else width_m / 2.0
+        lanes = math.ceil(reach / spacing_m) + 1
+    d = spacing_m * np.arange(1, lanes + 1, dtype=np.float64)[None, :]
+    return float(_lattice_detection(model, width_m, d, curve)[0])
 
 
 def undone_lane_kept(

@@ -580,6 +580,9 @@ def _plan_search(
     fractions = _class_fractions(cm, polygon)
     approach = float(shapely.distance(shapely.Point(*launches.mean(axis=0)), polygon))
 
+    def found_before(spacing: float) -> float:
+        return budget.found_by_lanes_before(model, width, spacing, task.sensor.lateral_range)
+
     def typical_losses(spacing: float, searchers: int) -> dict:
         run_m = polygon.area / spacing / max(searchers, 1) + approach
         window = budget.search_window_s(mission, task, start)
@@ -589,7 +592,7 @@ def _plan_search(
             surf_s=surf_s,
             beach_s=max(window[1] - start, 0.0),
             driven_m={c: f * run_m for c, f in fractions.items()},
-            in_mine_area_m=run_m - approach,
+            in_mine_area_m=(run_m - approach) * (1.0 - found_before(spacing)),
             breaker_hazard=per_hit,
             speed_mps=speed,
         )

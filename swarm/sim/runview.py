@@ -230,6 +230,7 @@ class RunView:
             if prev != MARK or self.marking[i] != k:
                 # around obstacles, not into them: a robot pushing on a log spins until it is stuck
                 self.routes.set(i, self.router.route(self.robot_state[i, :2], self.objects_m[k]))
+                self._steer_clear_of_finds(i, but=k)
             if self.marking[i] != k:
                 self.mark_placed[i] = False
             self.marking[i] = k
@@ -243,6 +244,7 @@ class RunView:
                     self.robot_state[i, :2], self.setup.nearest_pickup(self.robot_state[i, :2])
                 ),
             )
+            self._steer_clear_of_finds(i)
             if self.on_map[i] and self.phase[i] >= BEACH:
                 self.phase[i] = RETURNING
         if command in (LOITER, RELAY):
@@ -254,12 +256,20 @@ class RunView:
         """Replace robot i's route (and role); it follows it under the `follow` command, clear of the
         objects found and not yet marked."""
         self.routes.set(i, waypoints, track_from)
-        known = self.objects_m[self.object_marker < 0]
-        if len(known):
-            self.routes.steer_clear(i, self.robot_state[i, :2], known, AVOID_MINE_M)
+        self._steer_clear_of_finds(i)
         if role is not None:
             self.role[i] = ROLES.index(role)
         self.command[i] = FOLLOW
+
+    def _steer_clear_of_finds(self, i: int, but: int = -1) -> None:
+        """Side-step robot i's new route around the objects found and not yet marked, but object
+        `but` (the one it is on its way to mark). Every route is laid this way: in mine_clear,
+        robots driving to mark one mine set off others the swarm had found hours before."""
+        open_ = self.object_marker < 0
+        if but >= 0:
+            open_[but] = False
+        if open_.any():
+            self.routes.steer_clear(i, self.robot_state[i, :2], self.objects_m[open_], AVOID_MINE_M)
 
     def route_goal(self) -> np.ndarray:
         """(n, 2) the last point of each robot's route (its own position without one)."""

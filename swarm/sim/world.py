@@ -592,7 +592,8 @@ class World:
     def _report(self, run: RunView, det: sensing.Detection) -> None:
         b = run.b
         xy = np.asarray(det.xy, dtype=np.float64)
-        who = np.flatnonzero(self.alive[b] & self.on_map[b] & (self.marking[b] < 0))
+        # everyone on the move, those on their way to mark another find too: not a placed marker
+        who = np.flatnonzero(self.alive[b] & self.on_map[b] & ~self.mark_placed[b])
         n = self.n
         for g in self.routes.may_pass(who + b * n, self.robot_state[b, who, :2], xy, AVOID_MINE_M).tolist():
             run.routes.steer_clear(g - b * n, self.robot_state[b, g - b * n, :2], xy[None], AVOID_MINE_M)

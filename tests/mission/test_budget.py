@@ -203,6 +203,42 @@ def test_an_undone_lane_keeps_what_the_inverse_cube_rates_of_the_others_give(spa
     )
 
 
+@pytest.mark.parametrize("spacing", [1.5, 2.0, 3.0])
+def test_the_lanes_swept_before_have_found_part_of_what_lies_under_a_lane(spacing: float) -> None:
+    """A mine under a lane has met the inverse-cube rates of the lanes swept before it, at S, 2S,
+    ... on one side: sum_k c / (k S)^2 = c pi^2 / (6 S^2), c = W^2 / (4 pi), so it has been found
+    with 1 - exp(-pi W^2 / (24 S^2)) (to the 60 lanes summed: W^2 / (240 pi S^2)). A definite range
+    has found it when a lane before lies within W/2; a tabulated curve with 1 - prod(1 - p(kS));
+    random search has no lanes."""
+    w = 3.0
+    cube = 1.0 - math.exp(-math.pi * w**2 / (24.0 * spacing**2))
+    got = budget.found_by_lanes_before("inverse_cube", w, spacing)
+    assert got == pytest.approx(cube, abs=w**2 / (240.0 * math.pi * spacing**2))
+    assert budget.found_by_lanes_before("cookie_cutter", w, spacing) == (1.0 if spacing <= w / 2 else 0.0)
+    curve = LateralRange(range_m=[0.0, 1.0, 2.0, 4.0], probability=[1.0, 0.8, 0.4, 0.0])
+    p = np.interp(spacing * np.arange(1, 4), curve.range_m, curve.probability, right=0.0)
+    assert budget.found_by_lanes_before("cookie_cutter", w, spacing, curve) == pytest.approx(
+        1.0 - np.prod(1.0 - p)
+    )
+    assert budget.found_by_lanes_before("random", w, spacing) == 0.0
+
+
+def test_the_mean_distance_between_two_points_of_the_tracks() -> None:
+    """Two points uniform on a line of length L lie L/3 apart on average; on two parallel lines
+    of length L a distance D apart (a point on each line half the time), the mean over the pairs of
+    points evenly spaced along them, computed directly."""
+    from swarm.mission.exposure import mean_distance_apart
+
+    line = np.array([[0.0, 0.0], [300.0, 0.0], [900.0, 0.0]])
+    assert mean_distance_apart([line]) == pytest.approx(300.0, rel=0.01)
+    other = np.array([[0.0, 40.0], [900.0, 40.0]])
+    x = np.linspace(0.0, 900.0, 301)
+    dx = x[:, None] - x[None, :]
+    across = np.hypot(dx, 40.0).mean()
+    assert mean_distance_apart([line, other]) == pytest.approx((np.abs(dx).mean() + across) / 2, rel=0.01)
+    assert mean_distance_apart([np.array([[5.0, 5.0]])]) == 0.0
+
+
 def test_unreachable_criterion_is_said(mission) -> None:
     d = _design(mission, 24, reach=0.5)
     assert "no spacing reaches" in d.note and d.spacing_m == pytest.approx(d.min_spacing_m)

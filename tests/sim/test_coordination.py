@@ -773,6 +773,40 @@ def test_a_mark_nobody_can_reach_before_the_clearance_is_not_handed_out(mine_cle
     assert offer(600.0) == -1
 
 
+def test_a_robot_on_its_way_to_mark_a_mine_keeps_clear_of_the_others_found(mine_clear_env) -> None:
+    """A robot sent to mark one mine side-steps the found mines nobody has marked yet (by
+    `AVOID_MINE_M`), those found before it set off and one found while it is on its way, and still
+    ends on its own mine: mark trips drove straight over them, 10 of the 35 mine losses of 48
+    mine_clear runs, each on a mine found 8-76 minutes before."""
+    from shapely.geometry import LineString, Point
+
+    from swarm.sim.runview import AVOID_MINE_M, MARK
+    from swarm.sim.sensing import Detection
+
+    env, _ = mine_clear_env
+    env.reset(seed=1)
+    start, found, target, later = (
+        np.array(p) for p in ([300.0, 120.0], [320.0, 120.2], [360.0, 120.0], [340.0, 119.8])
+    )
+    assert env.plan.costmap.segments_free(start[None], target[None])[0]  # a straight route there
+    env.objects_m = np.array([found, target])
+    env.object_mine = np.full(2, -1)
+    env.object_marker = np.full(2, -1)
+    env.robot_state[0, :2] = start
+    env.on_map[0] = True  # ashore
+    env.set_command(0, MARK, target)
+    route = LineString(env.routes.remaining(0))
+    assert route.distance(Point(found)) >= AVOID_MINE_M - 1e-9
+    assert np.allclose(env.routes.remaining(0)[-1], target)
+    env.world._report(env.run, Detection(robot=1, mine=-1, xy=tuple(later), t_s=env.t_s))
+    route = LineString(env.routes.remaining(0))
+    assert (
+        route.distance(Point(later)) >= AVOID_MINE_M - 1e-9
+        and route.distance(Point(found)) >= AVOID_MINE_M - 1e-9
+    )
+    assert np.allclose(env.routes.remaining(0)[-1], target) and env.marking[0] == 1
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize(("count", "seed"), [(24, 8194404411035719671), (30, 11166977146969951446)])
 def test_nobody_is_lost_in_the_blast_on_the_way_to_a_mark(count: int, seed: int) -> None:
