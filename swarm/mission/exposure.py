@@ -48,7 +48,7 @@ class WayIn:
     window_end_s: float
     last_m: np.ndarray  # where its planned route ends
     track_m: dict[str, float]  # metres of its search tracks on each class
-    track_inside_m: float  # of which in the mine area
+    track_inside_m: float  # of which in the mine area, counted as `budget.Exposure.in_mine_area_m`
     #: its exposure ashore on the way to its track, and along the track (`track_left`)
     before_track: budget.Exposure | None = None
     on_track: budget.Exposure | None = None
