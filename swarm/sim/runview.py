@@ -230,7 +230,7 @@ class RunView:
             if prev != MARK or self.marking[i] != k:
                 # around obstacles, not into them: a robot pushing on a log spins until it is stuck
                 self.routes.set(i, self.router.route(self.robot_state[i, :2], self.objects_m[k]))
-                self._steer_clear_of_finds(i, but=k)
+                self._steer_clear_of_finds(i, marking=k)
             if self.marking[i] != k:
                 self.mark_placed[i] = False
             self.marking[i] = k
@@ -261,13 +261,13 @@ class RunView:
             self.role[i] = ROLES.index(role)
         self.command[i] = FOLLOW
 
-    def _steer_clear_of_finds(self, i: int, but: int = -1) -> None:
-        """Side-step robot i's new route around the objects found and not yet marked, but object
-        `but` (the one it is on its way to mark). Every route is laid this way: in mine_clear,
+    def _steer_clear_of_finds(self, i: int, marking: int = -1) -> None:
+        """Side-step robot i's new route around the objects found and not yet marked, all but object
+        `marking` (the one it is on its way to mark). Every route is laid this way: in mine_clear,
         robots driving to mark one mine set off others the swarm had found hours before."""
         open_ = self.object_marker < 0
-        if but >= 0:
-            open_[but] = False
+        if marking >= 0:
+            open_[marking] = False
         if open_.any():
             self.routes.steer_clear(i, self.robot_state[i, :2], self.objects_m[open_], AVOID_MINE_M)
 
