@@ -46,6 +46,7 @@ from swarm.sim.criteria import MissionScore
 from swarm.sim.mines import lay_mines
 from swarm.sim.routes import Routes, steer_point
 from swarm.sim.runview import (
+    AVOID_MINE_M,
     BEACH,
     DONE,
     FOLLOW,
@@ -64,8 +65,6 @@ from swarm.sim.setup import MissionSetup
 
 #: A marking robot marks the object it loiters by within this distance (m).
 MARK_RADIUS_M = 1.0
-#: Robots keep this far from a mine that has been found and is not yet marked (m).
-AVOID_MINE_M = 1.0
 #: Above this submersion a returning robot is afloat beyond the surf and picked up.
 PICKUP_SUBMERSION = 0.99
 #: The wheels find traction (terrain mode on) below this submersion.
