@@ -87,14 +87,14 @@ def _dry(mission: Mission, by_class: dict[str, float]) -> dict[str, float]:
     return {c: v for c, v in by_class.items() if not mission.terrain_library[c].is_water}
 
 
-def _task_of(mission: Mission, search: SearchPlan):
+def task_of(mission: Mission, search: SearchPlan):
     """The mission's search task that `search` plans."""
     return next(t for t in mission.tasks_of("search") if t.area == search.area)
 
 
 def _found_before(mission: Mission, search: SearchPlan) -> float:
     """`budget.found_by_lanes_before` on the lanes of `search`."""
-    curve = _task_of(mission, search).sensor.lateral_range
+    curve = task_of(mission, search).sensor.lateral_range
     return budget.found_by_lanes_before(search.model, search.sweep_width_m, search.spacing_m, curve)
 
 
@@ -156,7 +156,7 @@ def off_plan_driving(mission: Mission, cm: CostMap, plan: MissionPlan, ways: lis
     else to the mission's spares, else to its searchers, in equal shares."""
     out: list = [({}, 0.0) for _ in ways]
     for s in plan.search:
-        task = _task_of(mission, s)
+        task = task_of(mission, s)
         team = [k for k, w in enumerate(ways) if w.search is s]
         searchers = [k for k in team if plan.robots[k].role == "search"]
         takers = [k for k in team if plan.robots[k].role == "spare"]

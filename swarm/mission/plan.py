@@ -907,7 +907,7 @@ def _budget(mission: Mission, plan: MissionPlan) -> dict:
             for rp in plan.robots
             if len(w := np.vstack([rp.ground_m.reshape(-1, 2), rp.track_m])) >= 2
         ]
-        task = next(t for t in mission.tasks_of("search") if t.area == s.area)
+        task = exposure.task_of(mission, s)
         model = "random" if s.model == "random_search" else s.model
         if lines and mine_area is not None:
             s.expected_detection = detection.expected_detection(
