@@ -10,9 +10,10 @@ rates the simulator draws from (`swarm.sim.hazards`):
 - wave impact: 1 - prod(1 - p_hit), one breaker a wave period T while in the surf zone, each
   disabling with `SurfHazard.damage_probability` at the local breaker height where it hits
   (`swarm.world.coastal.local_breaker_height`, as the simulator's hazards); the time in the surf is
-  the planned way in over surf-zone cells (sea leg and ground path) at swim speed, and the heights
-  are met in proportion to the metres on them (`surf_crossing`); ashore, the same on the search
-  tracks' surf-zone metres at the search speed;
+  the planned way in over surf-zone cells (sea leg and ground path) at the way a robot makes there
+  among the breakers, and the heights are met in proportion to the time under them
+  (`swarm.mission.surf_speed`); ashore, the same on the search tracks' surf-zone cells at the
+  search speed;
 - immobilization: per_km x mode factor x (1 + (slip / 0.3)^2) per metre on each class, with each
   mode's steady slip at cruise (the cost map's mode speeds);
 - rock: damage_per_km per metre on rock, and hidden rocks met per metre on land (hidden_per_ha x
@@ -131,8 +132,8 @@ class Exposure:
     #: unfound when the robot drives it (a lane beside lanes swept before: `found_by_lanes_before`;
     #: robots steer clear of the mines found)
     in_mine_area_m: float = 0.0
-    #: -log(1 - p) of one breaker, averaged over the surf crossing (`surf_crossing`); None: every
-    #: breaker at the offshore height
+    #: -log(1 - p) of one breaker, averaged over the time in the surf (`surf_speed.SurfZone`);
+    #: None: every breaker at the offshore height
     breaker_hazard: float | None = None
     #: ground speed in the mine area (m/s); None: the cruise wheel speed
     speed_mps: float | None = None
@@ -160,7 +161,7 @@ def surf_heights(mission: Mission) -> np.ndarray:
     return local_breaker_height(bm.elevation_m, surf_cells(mission), mission.hazards.surf.wave_height_m)
 
 
-def _samples(cm: CostMap, polyline: np.ndarray) -> tuple[np.ndarray, ...]:
+def samples_along(cm: CostMap, polyline: np.ndarray) -> tuple[np.ndarray, ...]:
     """`polyline` cut into pieces of at most half a cell: their midpoints (k, 2), lengths (k,) and
     cells (rows, cols); empty for fewer than two points."""
     pts = np.asarray(polyline, dtype=np.float64).reshape(-1, 2)
@@ -178,27 +179,11 @@ def _samples(cm: CostMap, polyline: np.ndarray) -> tuple[np.ndarray, ...]:
     return mid, piece, row, col
 
 
-def surf_crossing(
-    mission: Mission, cm: CostMap, polyline: np.ndarray, heights: np.ndarray
-) -> tuple[float, float]:
-    """Metres of `polyline` over the surf zone (`heights` > 0, `surf_heights`), and -log(1 - p) of
-    one breaker averaged over those metres (0 without any): a robot swimming through at a steady
-    speed meets each local height in proportion to its metres."""
-    _, piece, row, col = _samples(cm, polyline)
-    h = heights[row, col]
-    on = h > 0
-    metres = float(piece[on].sum())
-    if metres <= 0:
-        return 0.0, 0.0
-    hazard = -np.log1p(-mission.hazards.surf.damage_probability(h[on]))
-    return metres, float((piece[on] * hazard).sum() / metres)
-
-
 def driven_by_class(
     cm: CostMap, polyline: np.ndarray, mine_area: BaseGeometry | None
 ) -> tuple[dict[str, float], float]:
     """Metres of `polyline` on each terrain class, and inside `mine_area` (sampled at half a cell)."""
-    mid, piece, row, col = _samples(cm, polyline)
+    mid, piece, row, col = samples_along(cm, polyline)
     if not len(piece):
         return {}, 0.0
     cls = cm.terrain[row, col].astype(np.intp)

@@ -18,6 +18,7 @@ from shapely.geometry import LineString
 
 from swarm.mission import budget
 from swarm.mission.schema import Mission
+from swarm.mission.surf_speed import SurfZone
 from swarm.planning import CostMap
 from swarm.planning.router import Router
 
@@ -98,17 +99,18 @@ def _found_before(mission: Mission, search: SearchPlan) -> float:
     return budget.found_by_lanes_before(search.model, search.sweep_width_m, search.spacing_m, curve)
 
 
-def way_in(mission: Mission, cm: CostMap, rp: RobotPlan, heights, ashore, mine_area, by_task) -> WayIn:
+def way_in(mission: Mission, cm: CostMap, rp: RobotPlan, zone: SurfZone, ashore, mine_area, by_task) -> WayIn:
     """Robot `rp`'s exposure along its planned route: the swim, the surf along the sea leg and the
-    ground path (a spare swims from its entry to the nearest dry ground, where the simulator's
-    robots wait out of the breakers), and its ground route until its task's window ends."""
+    ground path at the way it makes there (`SurfZone.crossing`; a spare swims from its entry to the
+    nearest dry ground, where the simulator's robots wait out of the breakers), and its ground route
+    until its task's window ends."""
     swim = mission.robot.swim_speed_mps
     sea_leg = rp.sea_leg_m.reshape(-1, 2)
     on = rp.ground_m.reshape(-1, 2) if len(rp.ground_m) else ashore(sea_leg[-1])
-    leg_surf_m, _ = budget.surf_crossing(mission, cm, sea_leg, heights)
-    surf_m, per_hit = budget.surf_crossing(mission, cm, np.vstack([sea_leg, on]), heights)
-    arrive = rp.release_s + rp.sea_time_s
-    ashore_s = arrive + (surf_m - leg_surf_m) / swim
+    leg = zone.crossing(sea_leg)
+    surf = zone.crossing(np.vstack([sea_leg, on]))
+    arrive = rp.release_s + rp.sea_time_s  # the schedule swims the sea leg at swim speed
+    ashore_s = arrive + max(surf.seconds - leg.seconds, 0.0)
     search = by_task.get(rp.task or "")
     end = search.design["window_s"][1] if search is not None else mission.beach_end_s
     land = np.vstack([p.reshape(-1, 2) for p in (rp.ground_m, rp.track_m)])
@@ -119,17 +121,17 @@ def way_in(mission: Mission, cm: CostMap, rp: RobotPlan, heights, ashore, mine_a
         track_inside *= 1.0 - _found_before(mission, search)
     approach, track = _dry(mission, approach), _dry(mission, track)
     speed = search.design.get("speed_mps") if search is not None else None
-    wet_m, wet_hit = budget.surf_crossing(mission, cm, rp.track_m, heights)
+    wet = zone.crossing(rp.track_m, budget.ground_speed(mission, speed))
     exposure = budget.Exposure(
-        sea_s=max(rp.sea_time_s - leg_surf_m / swim, 0.0),
-        surf_s=surf_m / swim,
+        sea_s=max(rp.sea_time_s - leg.metres / swim, 0.0),
+        surf_s=surf.seconds,
         beach_s=max(end - ashore_s, 0.0),
         driven_m=add_metres(approach, track),
         in_mine_area_m=approach_inside + track_inside,
-        breaker_hazard=per_hit,
+        breaker_hazard=surf.hazard_per_hit,
         speed_mps=speed,
-        beach_surf_s=wet_m / budget.ground_speed(mission, speed),
-        beach_breaker_hazard=wet_hit,
+        beach_surf_s=wet.seconds,
+        beach_breaker_hazard=wet.hazard_per_hit,
     )
     last = (land if len(land) else on)[-1]
     before, on_track = None, None
@@ -225,17 +227,17 @@ def add_metres(a: dict[str, float], b: dict[str, float]) -> dict[str, float]:
 
 
 def way_back(
-    mission: Mission, cm: CostMap, start: np.ndarray, pickups: np.ndarray, heights
+    mission: Mission, cm: CostMap, start: np.ndarray, pickups: np.ndarray, zone: SurfZone
 ) -> budget.Exposure:
-    """The way back to sea from `start`: a straight drive to the nearest pick-up point and the swim
-    out through the surf on it."""
+    """The way back to sea from `start`: a straight drive to the nearest pick-up point and out
+    through the surf on it, at the way a robot makes there (`SurfZone.crossing`)."""
     way = np.vstack([start, pickups[np.argmin(np.hypot(*(pickups - start).T))]])
-    surf_m, per_hit = budget.surf_crossing(mission, cm, way, heights)
+    surf = zone.crossing(way)
     dry = _dry(mission, budget.driven_by_class(cm, way, None)[0])
     return budget.Exposure(
         sea_s=0.0,
-        surf_s=surf_m / mission.robot.swim_speed_mps,
+        surf_s=surf.seconds,
         beach_s=sum(dry.values()) / mission.robot.wheel_speed_mps,
         driven_m=dry,
-        breaker_hazard=per_hit,
+        breaker_hazard=surf.hazard_per_hit,
     )

@@ -46,6 +46,7 @@ from swarm.errors import SwarmError
 from swarm.files import write_text_atomic
 from swarm.mission import budget, exposure
 from swarm.mission.schema import Mission
+from swarm.mission.surf_speed import SurfZone
 from swarm.planning import CostMap, PlanningError, build_costmap, detection
 from swarm.planning.allocation import assign
 from swarm.planning.batch import plan_many
@@ -690,22 +691,22 @@ def _class_fractions(cm: CostMap, polygon) -> dict[str, float]:
 
 
 def _swim_times(mission: Mission, cm: CostMap, launches: np.ndarray, polygon) -> tuple[float, float, float]:
-    """A robot's time at sea and in the surf (on surf cells) on its way from a launch point toward
-    `polygon`, at swim speed, and one breaker's hazard on the way (`budget.surf_crossing`),
-    averaged over the launch points."""
+    """A robot's time at sea (at swim speed) and in the surf (surf cells, at the way it makes
+    there: `SurfZone.crossing`) on its way from a launch point toward `polygon`, and one breaker's
+    hazard on the way, averaged over the launch points."""
     swim = mission.robot.swim_speed_mps
-    heights = budget.surf_heights(mission)
+    zone = SurfZone(mission, cm)
     sea, surf, hazard = [], [], []
     for p in launches:
         q = np.array(shapely.ops.nearest_points(polygon, shapely.Point(*p))[0].coords[0])
         by_class, _ = budget.driven_by_class(cm, np.vstack([p, q]), None)
-        surf_m, per_hit = budget.surf_crossing(mission, cm, np.vstack([p, q]), heights)
+        crossing = zone.crossing(np.vstack([p, q]))
         water_m = sum(v for c, v in by_class.items() if mission.terrain_library[c].is_water)
-        sea.append((mission.launch.release_offshore_m + max(water_m - surf_m, 0.0)) / swim)
-        surf.append(surf_m / swim)
-        hazard.append(per_hit * surf_m)
-    metres = sum(surf) * swim
-    return float(np.mean(sea)), float(np.mean(surf)), float(sum(hazard) / metres) if metres > 0 else 0.0
+        sea.append((mission.launch.release_offshore_m + max(water_m - crossing.metres, 0.0)) / swim)
+        surf.append(crossing.seconds)
+        hazard.append(crossing.hazard_per_hit * crossing.seconds)
+    seconds = sum(surf)
+    return float(np.mean(sea)), float(np.mean(surf)), float(sum(hazard) / seconds) if seconds > 0 else 0.0
 
 
 def _arrival_estimate_s(mission: Mission, launches: np.ndarray, polygon) -> float:
@@ -839,8 +840,8 @@ def _budget(mission: Mission, plan: MissionPlan) -> dict:
     areas = budget.mine_areas(mission)
     mine_area = shapely.union_all(areas) if areas else None
     by_task = {s.task: s for s in plan.search}
-    heights = budget.surf_heights(mission)
-    ashore = exposure.nearest_ashore(mission, cm, heights > 0)
+    zone = SurfZone(mission, cm)
+    ashore = exposure.nearest_ashore(mission, cm, zone.heights > 0)
     per_phase: dict[str, dict[str, float]] = {p: {} for p in budget.PHASE_NAMES}
     back = mission.phases.return_to_sea
     way_back: dict[str, float] = {}
@@ -857,7 +858,7 @@ def _budget(mission: Mission, plan: MissionPlan) -> dict:
     # the routes as the robots drive them: stitched around blocked ground, with the simulator's seed
     router = Router(cm, seed=mission.seed)
     driven = dataclasses.replace(plan, robots=[exposure.drivable(rp, router) for rp in plan.robots])
-    ways = [exposure.way_in(mission, cm, rp, heights, ashore, mine_area, by_task) for rp in driven.robots]
+    ways = [exposure.way_in(mission, cm, rp, zone, ashore, mine_area, by_task) for rp in driven.robots]
     extra = exposure.off_plan_driving(mission, cm, driven, ways)
     for rp, way, (more_m, more_inside) in zip(driven.robots, ways, extra, strict=True):
         exposed = dataclasses.replace(
@@ -876,7 +877,7 @@ def _budget(mission: Mission, plan: MissionPlan) -> dict:
         still = 1.0 - budget.lost_probability(whole)
         if back.enabled:
             returning += still
-            home = exposure.way_back(mission, cm, way.last_m, pickups, heights)
+            home = exposure.way_back(mission, cm, way.last_m, pickups, zone)
             for cause, p in budget.return_losses(mission, cm, home).items():
                 way_back[cause] = way_back.get(cause, 0.0) + still * p
         unseen_blasts += expected["beach"].get("mine", 0.0) * budget.unseen_share(mission, exposed.speed_mps)

@@ -108,6 +108,13 @@ class TerrainTable:
         return self.names.index(name)
 
 
+#: The default jet holds this multiple of the swim speed against deep-water drag.
+JET_SPEED_MARGIN = 1.5
+#: A robot's jet works above this submersion (its cell's buoyancy fraction): its intake is under
+#: water. The simulator's controller turns the jet on there, and the plan's surf speeds assume it.
+JET_SUBMERSION = 0.3
+
+
 class UnknownModeError(InputError, KeyError):
     """A mode name the library does not have: an input error, and a KeyError for Mapping.get."""
 
@@ -141,6 +148,11 @@ class TerrainLibrary(Mapping[str, TerrainMode]):
         modes = [self[n] for n in order]
         cols = {c: np.array([getattr(m, c) for m in modes], dtype=np.float64) for c in COEFFICIENTS}
         return TerrainTable(order, cols)
+
+    def default_jet_thrust_n(self, swim_speed_mps: float) -> float:
+        """Thrust that holds `JET_SPEED_MARGIN` x the swim speed against the hull's deep-water drag:
+        margin for currents and surges (the mission schema's default for `robot.jet_thrust_n`)."""
+        return float(self["deep_water"].drag_n_s2_per_m2 * (JET_SPEED_MARGIN * swim_speed_mps) ** 2)
 
     def merged(self, other: TerrainLibrary) -> TerrainLibrary:
         """This library with `other`'s modes replacing or adding to it."""

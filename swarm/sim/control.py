@@ -20,6 +20,7 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
+from swarm.robot.terrain import JET_SUBMERSION
 from swarm.sim.physics_kernels import maximum, minimum
 
 #: Thesis eq. 2.26: the effective track width of the skid-steered robot is d / 0.73.
@@ -31,8 +32,6 @@ YAW_GAIN_PER_S = 1.5
 MAX_YAW_RATE_RADPS = 1.2
 #: Within this distance of its target a robot stops (m).
 ARRIVE_M = 0.25
-#: A robot counts as in water (jet on) above this submersion (buoyancy fraction of its cell).
-JET_SUBMERSION = 0.3
 
 
 @dataclass(frozen=True)

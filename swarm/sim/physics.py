@@ -52,7 +52,7 @@ What is modelled, and where it comes from:
    Stockdon et al. 2006, `coastal.stockdon_runup_r2`, is 0.5-1.0 H_b for H_b = 1 m, T = 8 s on
    0.05-0.15 slopes), and the cap keeps run-off channels and rivers inland out of the surf.
    `shoreward` is the unit uphill gradient of the elevation smoothed by a Gaussian of
-   `SHOREWARD_SMOOTHING_CELLS` cells, +y (north) where that vanishes. Breaker crests pass at t =
+   `coastal.SHOREWARD_SMOOTHING_CELLS` cells, +y (north) where that vanishes. Breaker crests pass at t =
    wave_phase_s + k T; a robot in the surf at the start of the substep a crest falls in is hit,
    by a breaker of the local height min(H_b, 0.78 h) (`PhysicsStep.wave_height_m`): across the surf
    zone the breakers lose height with the depth, so a robot in the swash takes small ones.
@@ -91,7 +91,6 @@ from dataclasses import dataclass, fields
 from typing import TYPE_CHECKING
 
 import numpy as np
-from scipy.ndimage import gaussian_filter
 
 from swarm.robot.params import GRAVITY_MPS2, RobotParams
 from swarm.robot.skid import HEADING, SkidModel, U, V, X, Y
@@ -112,7 +111,15 @@ from swarm.sim.physics_kernels import (
     WAVE_Y,
 )
 from swarm.world.beachmap import BeachMap
-from swarm.world.coastal import BREAKING_INDEX, local_breaker_height, surf_zone_mask
+from swarm.world.coastal import (
+    BREAKING_INDEX,
+    MIN_DEPTH_M,
+    WAVE_SKEW,
+    local_breaker_height,
+    shoreward_direction,
+    surf_zone_mask,
+    wave_shape,
+)
 
 if TYPE_CHECKING:
     from swarm.mission.schema import Mission
@@ -127,16 +134,6 @@ ETA_JET = 0.5
 SEAWATER_DENSITY_KGPM3 = 1025.0
 #: Jet nozzle area, m^2 (assumed: a ~50 mm nozzle).
 JET_NOZZLE_AREA_M2 = 0.002
-#: Second-harmonic ratio r of the wave velocity shape (cos phi + r cos 2 phi) / (1 + r): velocity
-#: skewness 0.76, within surf-zone observations [Ruessink et al. 2012].
-WAVE_SKEW = 0.5
-#: Shallowest still-water depth used for wave velocities, m: keeps u = (H/2) sqrt(g/h) finite.
-MIN_DEPTH_M = 0.05
-#: Gaussian smoothing of the elevation for the shoreward direction, cells: follows the beach's
-#: trend rather than single-cell bumps.
-SHOREWARD_SMOOTHING_CELLS = 3.0
-#: Smoothed gradient below which a cell has no shoreward direction of its own (falls back to +y).
-_FLAT_GRADIENT = 1e-6
 #: Wheel surface speed below which slip is reported as 0, m/s.
 SLIP_MIN_SPEED_MPS = 0.05
 
@@ -186,8 +183,7 @@ class SeaState:
 
     def shape_at_phase(self, phi: float) -> float:
         """`wave_shape` at wave phase `phi` (rad; 0 at a crest)."""
-        r = self.wave_skew
-        return (math.cos(phi) + r * math.cos(2.0 * phi)) / (1.0 + r)
+        return wave_shape(phi, self.wave_skew)
 
     def crests_by(self, t_s: float, wave_phase_s: float) -> int:
         """Crests that have passed by time t (up to a constant): a crest lies in (a, b] iff this grows."""
@@ -270,14 +266,7 @@ class Physics:
             surf |= beach.terrain == beach.class_index("surf")
         self.surf_mask: np.ndarray = surf
 
-        smooth = gaussian_filter(elevation, SHOREWARD_SMOOTHING_CELLS, mode="nearest")
-        s_dy, s_dx = np.gradient(smooth, beach.cell_m)
-        norm = np.hypot(s_dx, s_dy)
-        flat = norm < _FLAT_GRADIENT
-        safe = np.where(flat, 1.0, norm)
-        self.shoreward: np.ndarray = np.stack(
-            [np.where(flat, 0.0, s_dx / safe), np.where(flat, 1.0, s_dy / safe)], axis=-1
-        )
+        self.shoreward: np.ndarray = shoreward_direction(elevation, beach.cell_m)
 
         d_dx, d_dy = beach.gradient
         cos_slope = 1.0 / np.sqrt(1.0 + d_dx * d_dx + d_dy * d_dy)
@@ -298,7 +287,7 @@ class Physics:
     def default_jet_thrust_n(library: TerrainLibrary, swim_speed_mps: float) -> float:
         """Thrust that holds 1.5 x the swim speed against deep-water hull drag: margin for currents
         and surges (the mission schema's default for `robot.jet_thrust_n`)."""
-        return float(library["deep_water"].drag_n_s2_per_m2 * (1.5 * swim_speed_mps) ** 2)
+        return library.default_jet_thrust_n(swim_speed_mps)
 
     # --- lookups ---------------------------------------------------------------------------------
     def _cells(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:

@@ -38,10 +38,23 @@ References
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
+from scipy.ndimage import gaussian_filter
 
 #: Gravitational acceleration, m/s^2.
 G_MPS2 = 9.81
+#: Second-harmonic ratio r of the wave velocity shape (cos phi + r cos 2 phi) / (1 + r): velocity
+#: skewness 0.76, within surf-zone observations [Ruessink et al. 2012, Coastal Eng. 65, 56-63].
+WAVE_SKEW = 0.5
+#: Shallowest still-water depth used for wave velocities, m: keeps u = (H/2) sqrt(g/h) finite.
+MIN_DEPTH_M = 0.05
+#: Gaussian smoothing of the elevation for the shoreward direction, cells: follows the beach's
+#: trend rather than single-cell bumps.
+SHOREWARD_SMOOTHING_CELLS = 3.0
+#: Smoothed gradient below which a cell has no shoreward direction of its own (falls back to +y).
+_FLAT_GRADIENT = 1e-6
 
 #: Depth-limited breaking index H_b / h_b for a solitary wave [McCowan], used by [Dean91].
 BREAKING_INDEX = 0.78
@@ -152,6 +165,25 @@ def local_breaker_height(
     on a robot depend on this, not on the offshore height."""
     depth = np.maximum(min_depth_m, -np.asarray(elevation_m, dtype=np.float64))
     return np.where(surf, np.minimum(breaker_height_m, BREAKING_INDEX * depth), 0.0)
+
+
+def wave_shape(phi: float, skew: float = WAVE_SKEW) -> float:
+    """Shoreward wave orbital velocity over its crest value at wave phase `phi` (rad, 0 at a crest):
+    (cos phi + r cos 2 phi) / (1 + r), the second-order Stokes form; zero mean, 1 at the crest and a
+    weaker, longer trough (-0.5 at r = 0.5)."""
+    return (math.cos(phi) + skew * math.cos(2.0 * phi)) / (1.0 + skew)
+
+
+def shoreward_direction(elevation_m: np.ndarray, cell_m: float) -> np.ndarray:
+    """(rows, cols, 2) the unit uphill direction of the elevation smoothed over
+    `SHOREWARD_SMOOTHING_CELLS` cells: where the breakers run; +y (north) where it is flat."""
+    elevation = np.asarray(elevation_m, dtype=np.float64)
+    smooth = gaussian_filter(elevation, SHOREWARD_SMOOTHING_CELLS, mode="nearest")
+    s_dy, s_dx = np.gradient(smooth, cell_m)
+    norm = np.hypot(s_dx, s_dy)
+    flat = norm < _FLAT_GRADIENT
+    safe = np.where(flat, 1.0, norm)
+    return np.stack([np.where(flat, 0.0, s_dx / safe), np.where(flat, 1.0, s_dy / safe)], axis=-1)
 
 
 def surf_zone_width(

@@ -12,6 +12,7 @@ from scipy.stats import binom
 
 from swarm.mission import budget, load_mission
 from swarm.mission.schema import LateralRange
+from swarm.mission.surf_speed import SurfZone
 from swarm.planning import build_costmap
 
 MINE_CLEAR = "missions/mine_clear.yaml"
@@ -357,30 +358,6 @@ def test_a_mine_found_too_late_to_turn_counts_as_met_undetected(mission, speed) 
     assert budget.undetected_at_contact(mission, speed + 0.1) > budget.undetected_at_contact(mission, speed)
 
 
-def test_surf_crossing_counts_the_surf_metres_and_the_local_breakers(mission, costmap) -> None:
-    """A straight swim across gentle_fine's surf zone: its surf metres are the line's length over
-    surf cells (checked on a 1 cm walk), and one breaker's mean hazard lies between the smallest
-    and the largest local breaker's, below the offshore breaker's (they lose height toward the
-    shore). A line on dry ground crosses nothing."""
-    heights = budget.surf_heights(mission)
-    rows, cols = np.nonzero(heights > 0)
-    x, y = costmap.center_of(rows, cols)
-    # a north-south line through the middle of the surf zone, from deep water to the beach
-    x0 = float(np.median(x))
-    line = np.array([[x0, float(y.min()) - 20.0], [x0, float(y.max()) + 20.0]])
-    metres, per_hit = budget.surf_crossing(mission, costmap, line, heights)
-    t = np.linspace(0.0, 1.0, int(np.hypot(*(line[1] - line[0])) / 0.01) + 1)
-    walk = line[0] + (line[1] - line[0]) * t[:, None]
-    r, c = costmap.cell_of(walk[:, 0], walk[:, 1])
-    on = heights[r, c] > 0
-    assert metres == pytest.approx(on.mean() * np.hypot(*(line[1] - line[0])), abs=costmap.cell_m)
-    hazard = -np.log1p(-mission.hazards.surf.damage_probability(heights[r, c][on]))
-    assert hazard.min() - 1e-12 <= per_hit <= hazard.max() + 1e-12
-    assert per_hit < -math.log1p(-mission.hazards.surf.impact_damage_probability())
-    dry = np.array([[x0, float(y.max()) + 30.0], [x0 + 5.0, float(y.max()) + 30.0]])
-    assert budget.surf_crossing(mission, costmap, dry, heights) == (0.0, 0.0)
-
-
 def test_expected_losses_by_cause_count_a_robot_once() -> None:
     """Losses by phase in order: a robot lost at sea is not lost again ashore; within a phase the
     causes share the phase's loss by their hazards; the whole is P(lost)."""
@@ -425,11 +402,11 @@ def _extras(overrides: dict) -> tuple[list, list]:
     m = load_mission(MINE_CLEAR, overrides)
     plan = plan_mission(m, seed=m.seed, workers=1)
     cm = plan.costmap
-    heights = budget.surf_heights(m)
-    ashore = exposure.nearest_ashore(m, cm, heights > 0)
+    zone = SurfZone(m, cm)
+    ashore = exposure.nearest_ashore(m, cm, zone.heights > 0)
     area = shapely.union_all(budget.mine_areas(m))
     by_task = {s.task: s for s in plan.search}
-    ways = [exposure.way_in(m, cm, rp, heights, ashore, area, by_task) for rp in plan.robots]
+    ways = [exposure.way_in(m, cm, rp, zone, ashore, area, by_task) for rp in plan.robots]
     return exposure.off_plan_driving(m, cm, plan, ways), [rp.role for rp in plan.robots]
 
 
