@@ -16,9 +16,9 @@ robot is (`SeaState.crests_by`), so it meets each local height in proportion to 
 
 What it leaves out is the steering: the simulator's robots are pushed off their line by every wave
 and steer back. Driven straight from relay's launch points to the beach by the simulator's physics
-and controller, they are in the surf 66.5-67 s against 60-63.5 s from here (48.5 s at swim speed,
+and controller, they are in the surf 66.5-67 s against 60-64 s from here (48.5 s at swim speed,
 `tests/mission/test_surf_speed.py`); relay's two relays whose routes run 85-90 m along the surf
-zone, 280 s against 248-251 s (170-180 s at swim speed).
+zone, 280 s against 253-255 s (170-180 s at swim speed).
 """
 
 from __future__ import annotations
@@ -36,10 +36,11 @@ from swarm.robot.skid import HEADING, R, SkidModel, U, V, X, coeffs_for
 from swarm.robot.terrain import JET_SUBMERSION
 from swarm.world.coastal import MIN_DEPTH_M, shoreward_direction, wave_shape
 
-#: Integration step of `mean_speed`, s (the simulator's default physics substep).
-SUBSTEP_S = 0.1
-#: Wave periods `mean_speed` lets a robot settle for, then averages over.
-SETTLE_PERIODS, MEASURED_PERIODS = 1, 2
+#: Integration step of `mean_speed`, s: the simulator's physics substep (`swarm.sim.env.SimConfig`).
+SUBSTEP_S = 0.25
+#: Wave periods `mean_speed` lets a robot settle for, then averages over (its motion is periodic
+#: once settled: the robot's transients die out within seconds against the quadratic drag).
+SETTLE_PERIODS, MEASURED_PERIODS = 1, 1
 #: Headings are taken in bins this wide (degrees) for the cache: a cell crossed in one direction
 #: makes the same way whichever polyline crosses it.
 HEADING_BIN_DEG = 5.0
