@@ -500,7 +500,9 @@ def test_track_left_counts_the_way_to_the_track_whole_and_after_it_nothing() -> 
 @pytest.mark.slow
 def test_every_robot_launched_ends_lost_expended_or_back_at_sea() -> None:
     """With a return to sea, the plan accounts for every robot: the expected lost, the markers the
-    clearance expends, and those back at sea add up to the swarm. The markers are a robot of the
+    clearance expends, and those back at sea (the middle of each range) add up to the swarm, and
+    so do the most back with the fewest expended less the losses of the extra robots on the way
+    back. The markers are a robot of the
     search team on each mine found: at least the reserves that last, at most every robot of the
     team that lasts (a searcher marks only once the lost tracks are done), and the fewer are
     expended, the more come back. Without marks nobody is expended. The plan once counted only the
@@ -520,10 +522,11 @@ def test_every_robot_launched_ends_lost_expended_or_back_at_sea() -> None:
         fewest, most_back = b["expected_recovered"]
         on_the_way = sum(b["expected_losses"]["return"].values())
         lasting = count - b["expected_lost"] + on_the_way  # every robot here is the team's
-        assert b["expected_lost"] + least + most_back == pytest.approx(count)
+        assert b["expected_lost"] + (least + most) / 2 + (fewest + most_back) / 2 == pytest.approx(count)
         # a marker more is a robot less setting off, back at the way back's rate
-        rate = on_the_way / (lasting - least)
+        rate = on_the_way / (lasting - (least + most) / 2)
         assert most_back - fewest == pytest.approx((most - least) * (1 - rate))
+        assert b["expected_lost"] + least + most_back == pytest.approx(count - (most - least) / 2 * rate)
         found = s.design["mines_expected"] * team["expected_detection_after_losses"]
         assert most == pytest.approx(min(found, lasting))
         assert 0 <= least <= min(s.design["reserves"], found)
