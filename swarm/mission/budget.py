@@ -162,12 +162,12 @@ def surf_heights(mission: Mission) -> np.ndarray:
 
 
 def samples_along(cm: CostMap, polyline: np.ndarray) -> tuple[np.ndarray, ...]:
-    """`polyline` cut into pieces of at most half a cell: their midpoints (k, 2), lengths (k,) and
-    cells (rows, cols); empty for fewer than two points."""
+    """`polyline` cut into pieces of at most half a cell: their midpoints (k, 2), lengths (k,),
+    cells (rows, cols) and headings (k,), rad; empty for fewer than two points."""
     pts = np.asarray(polyline, dtype=np.float64).reshape(-1, 2)
     if len(pts) < 2:
         empty = np.empty(0, np.intp)
-        return np.empty((0, 2)), np.empty(0), empty, empty
+        return np.empty((0, 2)), np.empty(0), empty, empty, np.empty(0)
     seg = np.diff(pts, axis=0)
     length = np.hypot(seg[:, 0], seg[:, 1])
     step = cm.cell_m / 2.0
@@ -176,14 +176,14 @@ def samples_along(cm: CostMap, polyline: np.ndarray) -> tuple[np.ndarray, ...]:
     mid = np.repeat(pts[:-1], k, axis=0) + np.repeat(seg, k, axis=0) * t[:, None]
     piece = np.repeat(length / k, k)
     row, col = cm.cell_of(mid[:, 0], mid[:, 1])
-    return mid, piece, row, col
+    return mid, piece, row, col, np.repeat(np.arctan2(seg[:, 1], seg[:, 0]), k)
 
 
 def driven_by_class(
     cm: CostMap, polyline: np.ndarray, mine_area: BaseGeometry | None
 ) -> tuple[dict[str, float], float]:
     """Metres of `polyline` on each terrain class, and inside `mine_area` (sampled at half a cell)."""
-    mid, piece, row, col = samples_along(cm, polyline)
+    mid, piece, row, col, _ = samples_along(cm, polyline)
     if not len(piece):
         return {}, 0.0
     cls = cm.terrain[row, col].astype(np.intp)

@@ -135,15 +135,13 @@ class SurfZone:
         cruise speed, `robot.wheel_speed_mps`, which the simulator commands in the surf)."""
         speed = float(speed_mps if speed_mps is not None else self.mission.robot.wheel_speed_mps)
         pts = np.asarray(polyline, dtype=np.float64).reshape(-1, 2)
-        _, piece, row, col = budget.samples_along(self.cm, pts)
+        _, piece, row, col, heading = budget.samples_along(self.cm, pts)
         h = self.heights[row, col]
         on = np.flatnonzero(h > 0)
         if not len(on):
             return Crossing(0.0, 0.0, 0.0)
-        seg = np.diff(pts, axis=0)
-        per_seg = np.maximum(1, np.ceil(np.hypot(*seg.T) / (self.cm.cell_m / 2.0)).astype(np.int64))
-        angle = np.repeat(np.arctan2(seg[:, 1], seg[:, 0]), per_seg)[on]
-        bins = np.round(np.degrees(angle) / HEADING_BIN_DEG).astype(np.int64) % round(360 / HEADING_BIN_DEG)
+        bins = np.round(np.degrees(heading[on]) / HEADING_BIN_DEG).astype(np.int64)
+        bins %= round(360 / HEADING_BIN_DEG)
         made = self._made(row[on], col[on], bins, speed)
         seconds = piece[on] / made
         surf = self.mission.hazards.surf
