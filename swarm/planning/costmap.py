@@ -10,6 +10,13 @@ Impassable ground (`CostMap.reason`):
 - cells that a `keep_out` region covers any part of;
 - everything outside the map (the planner cannot know what is there).
 
+The brink: ground above land too steep to climb is kept `BRINK_MARGIN_M` farther from it than the
+footprint alone asks. A robot crossing or turning on the slope above a dune face drifts down it,
+and once on the face its wheels spin until the stuck rule takes it (`swarm.sim.hazards.STUCK_SLIP`).
+Below a face (the foot of a dune, around a steep pile of wrack) the slope carries a robot away from
+it, so only cells higher than their nearest steep cell get the margin; water too steep for
+traction (surf on a steep beach) gets none: the robots swim in through it.
+
 The footprint: the robot's centre must stay `half_width_m` from impassable ground, plus half the
 motion-checking resolution. OMPL checks a motion at points at most `resolution_m` apart, so any
 point between two checked points is within `resolution_m / 2` of one; blocking every cell any of
@@ -51,6 +58,14 @@ from swarm.world.beachmap import BeachMap
 NO_PROGRESS_FRACTION = 0.05
 #: The wheel surface speed (m/s) of the nominal straight-line command: the thesis robot's cruise.
 NOMINAL_WHEEL_SPEED_MPS = 0.6
+
+#: Extra distance (m) a robot's centre keeps from land too steep to climb, on the ground above it,
+#: beyond the footprint. Measured in the simulator (full_conops, 7761e18's plan): a robot crossing
+#: a 15-17 degree slope in vegetation held its line 0.4-0.5 m below it, and in a lane-end turn slid
+#: 1.3-1.6 m down onto the 19.5 degree face beneath, where it stuck in 31 of 32 runs. One metre
+#: blocks 1199 more cells of relay's map and 1224 of mine_clear's (about 1% of their free ground),
+#: cutting off no more than single cells.
+BRINK_MARGIN_M = 1.0
 
 #: `CostMap.reason` codes: why a cell is impassable.
 FREE, IMPASSABLE_TERRAIN, NO_TRACTION, TOO_STEEP, KEEP_OUT = 0, 1, 2, 3, 4
@@ -170,6 +185,7 @@ class CostMap:
     resolution_m: float
     speeds: ModeSpeeds  # every mode of the terrain library (the reference is the library's fastest)
     climb_limit_deg: np.ndarray = field(repr=False)  # (classes,) steepest climbable slope per class
+    brink_margin_m: float = 0.0  # extra clearance from land too steep to climb (`BRINK_MARGIN_M`)
 
     # geometry -------------------------------------------------------------------------------
     @property
@@ -223,6 +239,12 @@ class CostMap:
         impassable (the footprint's margin aside). Where mines are laid and searched for."""
         inside, row, col = self._locate(x, y)
         return inside & (self.reason[row, col] == FREE)
+
+    def on_brink(self, x: np.ndarray | float, y: np.ndarray | float) -> np.ndarray:
+        """True where a cell is blocked by the brink margin alone: the footprint fits there, so a
+        robot may drive in to reach a point (a mine to mark), though routes keep off."""
+        inside, row, col = self._locate(x, y)
+        return inside & self.blocked[row, col] & (self.clearance_m[row, col] >= self.inflation_m)
 
     def free_at(self, x: float, y: float) -> bool:
         """`is_free` of one point, in plain floats (the same arithmetic, without numpy's per-call
@@ -335,7 +357,7 @@ class CostMap:
         """Distance from a point to the nearest impassable cell or the map edge, and what it is."""
         xmin, ymin, xmax, ymax = self.bounds_m
         best, what = min(x - xmin, xmax - x, y - ymin, ymax - y), "the map edge"
-        reach = math.ceil(self.inflation_m / self.cell_m) + 2
+        reach = math.ceil((self.inflation_m + self.brink_margin_m) / self.cell_m) + 2
         row, col = (int(v) for v in self.cell_of(x, y))
         r0, r1 = max(row - reach, 0), min(row + reach + 1, self.shape[0])
         c0, c1 = max(col - reach, 0), min(col + reach + 1, self.shape[1])
@@ -394,6 +416,13 @@ class CostMap:
             )
         if self.blocked[row, col]:
             dist, what = self._nearest_obstacle(x, y)
+            if dist >= self.inflation_m:
+                return (
+                    f"is {dist:.2f} m from {what}: the planner keeps the centre "
+                    f"{self.inflation_m + self.brink_margin_m:.2f} m from ground too steep to climb, "
+                    f"{self.brink_margin_m:.2f} m more than from other obstacles, as a robot turning on "
+                    "the slope above slides down onto it"
+                )
             return (
                 f"is too close to {what} for the robot's footprint: {dist:.2f} m away, the planner keeps "
                 f"the centre {self.inflation_m:.2f} m clear (half-width {self.half_width_m:.2f} m + "
@@ -448,6 +477,7 @@ def build_costmap(
     half_width_m: float | None = None,
     resolution_m: float | None = None,
     nominal_wheel_speed_mps: float = NOMINAL_WHEEL_SPEED_MPS,
+    brink_margin_m: float = BRINK_MARGIN_M,
 ) -> CostMap:
     """The planner's view of `beach` for `robot` (see the module docstring).
 
@@ -459,8 +489,8 @@ def build_costmap(
     library = load_library() if library is None else library
     hw = robot_half_width_m(robot) if half_width_m is None else float(half_width_m)
     res = beach.cell_m / 2.0 if resolution_m is None else float(resolution_m)
-    if not (hw >= 0 and res > 0):
-        raise ValueError("half_width_m must be >= 0 and resolution_m > 0")
+    if not (hw >= 0 and res > 0 and brink_margin_m >= 0):
+        raise ValueError("half_width_m and brink_margin_m must be >= 0 and resolution_m > 0")
     classes = beach.terrain_classes
     modes = [library[c] for c in classes]
     # every mode of the library, so the reference (cost 1.0 per metre) is the same on every map
@@ -469,6 +499,7 @@ def build_costmap(
     class_cost = np.array([speeds.cost_per_m[names.index(c)] for c in classes])
     limit = np.array([m.max_climb_slope_deg for m in modes])
     passable = np.array([m.passable for m in modes])
+    water = np.array([m.is_water for m in modes])
     moving = np.isfinite(class_cost)
 
     terrain = np.asarray(beach.terrain)
@@ -480,14 +511,14 @@ def build_costmap(
     keep_out = tuple((r.name, r.geometry) for r in beach.regions_of_kind("keep_out"))
     reason[_keep_out_cells(beach, [g for _, g in keep_out])] = KEEP_OUT
 
-    # Gap (closest points) between two cells' squares is the centre distance less one cell per
-    # axis: the exact distance from a cell to impassable ground is the Euclidean distance
-    # transform of the impassable cells grown by one cell (Chebyshev). Outside the map counts.
-    pad = 2
-    impassable = np.pad(reason != FREE, pad, constant_values=True)
-    near = ndimage.binary_dilation(impassable, structure=np.ones((3, 3), dtype=bool))
-    clearance = ndimage.distance_transform_edt(~near)[pad:-pad, pad:-pad] * beach.cell_m
+    clearance = _clearance_from(reason != FREE, beach.cell_m, outside=True)
     blocked = clearance < hw + res / 2.0
+    steep_land = (reason == TOO_STEEP) & ~water[terrain]
+    if brink_margin_m > 0 and steep_land.any():
+        near = _clearance_from(steep_land, beach.cell_m, outside=False) < hw + res / 2.0 + brink_margin_m
+        _, (row, col) = ndimage.distance_transform_edt(~steep_land, return_indices=True)
+        elevation = np.asarray(beach.elevation_m)
+        blocked |= near & (elevation > elevation[row, col])  # above the face: a slide goes onto it
     component, _ = ndimage.label(~blocked)
 
     cost = class_cost[terrain].astype(np.float32)
@@ -508,7 +539,23 @@ def build_costmap(
         resolution_m=res,
         speeds=speeds,
         climb_limit_deg=limit,
+        brink_margin_m=float(brink_margin_m),
     )
+
+
+def _clearance_from(cells: np.ndarray, cell_m: float, *, outside: bool) -> np.ndarray:
+    """Distance (m) from every cell (any point of it) to the nearest of `cells`, and to the map's
+    edge if `outside`. The gap between two cells' squares is the centre distance less one cell per
+    axis, so it is the Euclidean distance transform of `cells` grown by one cell (Chebyshev)."""
+    from scipy import ndimage
+
+    pad = 2
+    grown = ndimage.binary_dilation(
+        np.pad(cells, pad, constant_values=outside), structure=np.ones((3, 3), bool)
+    )
+    if not grown.any():
+        return np.full(cells.shape, np.inf)
+    return ndimage.distance_transform_edt(~grown)[pad:-pad, pad:-pad] * cell_m
 
 
 def _segment_ends(p0: np.ndarray, p1: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

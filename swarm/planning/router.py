@@ -5,8 +5,9 @@ back to sea): a straight line where the cost map allows it, else an OMPL path wi
 
 Endpoints that fall on blocked cells (a robot pushed into the footprint margin, a target in the
 water) are moved to the nearest free cell first, and the original target is appended when it is
-in the water (the robot swims the last stretch). Paths are seeded per call from the router's seed
-and a counter, so a run replays exactly.
+in the water (the robot swims the last stretch) or on a brink (`CostMap.on_brink`: the robot
+drives the last stretch, as it must to mark a mine laid there). Paths are seeded per call from the
+router's seed and a counter, so a run replays exactly.
 """
 
 from __future__ import annotations
@@ -59,20 +60,20 @@ class Router:
         return out
 
     def reachable(self, xy: np.ndarray) -> np.ndarray:
-        """A target a robot can get to: itself if free or open water (it swims there), else the
-        nearest free cell (a track point on a driftwood log, in a boulder's footprint margin)."""
-        x, y = float(xy[0]), float(xy[1])
-        if self.cm.free_at(x, y):
-            return np.array([x, y])
-        r, c = (int(v) for v in self.cm.cell_of(x, y))
-        return np.array([x, y]) if self.cm.reason[r, c] == NO_TRACTION else self.snap(xy)
+        """A target a robot can get to: itself if free, open water (it swims there) or on a brink
+        (it drives in), else the nearest free cell (a track point on a driftwood log, in a
+        boulder's footprint margin)."""
+        if self.cm.free_at(float(xy[0]), float(xy[1])):
+            return np.array([float(xy[0]), float(xy[1])])
+        return self.reachable_many(np.asarray(xy, dtype=np.float64).reshape(1, 2))[0]
 
     def reachable_many(self, xy: np.ndarray) -> np.ndarray:
         """`reachable` of each point of `xy` (k, 2), in one pass."""
         out = np.asarray(xy, dtype=np.float64).reshape(-1, 2).copy()
         r, c = self.cm.cell_of(out[:, 0], out[:, 1])
-        land = self.cm.reason[r, c] != NO_TRACTION  # open water stays: the robot swims there
-        out[land] = self.snap_many(out[land])
+        # open water and the brink stay: the robot swims or drives the last stretch there
+        move = (self.cm.reason[r, c] != NO_TRACTION) & ~self.cm.on_brink(out[:, 0], out[:, 1])
+        out[move] = self.snap_many(out[move])
         return out
 
     def stitch(self, waypoints: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -89,13 +90,14 @@ class Router:
         free = self.cm.segments_free(pts[:-1], pts[1:])
         if bool(np.all(free)):
             return pts, np.arange(len(pts))
-        out, where = [pts[:1]], [0]
+        out, where, last = [pts[:1]], [0], pts[0]
         for k in range(1, len(pts)):
-            if free[k - 1]:
-                out.append(pts[k : k + 1])
-            else:
-                out.append(self._detour(out[-1][-1], pts[k])[1:])
-            where.append(where[-1] + len(out[-1]))
+            # a detour to where the robot already is (a repeated point on a brink) adds nothing
+            step = pts[k : k + 1] if free[k - 1] else self._detour(last, pts[k])[1:]
+            if len(step):
+                out.append(step)
+                last = step[-1]
+            where.append(where[-1] + len(step))
         return np.vstack(out), np.array(where)
 
     def _detour(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:

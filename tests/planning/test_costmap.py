@@ -9,6 +9,7 @@ import pytest
 from conftest import CELL_M, WALL_COL, wall_map
 
 from swarm.planning.costmap import (
+    BRINK_MARGIN_M,
     FREE,
     IMPASSABLE_TERRAIN,
     NO_TRACTION,
@@ -21,6 +22,7 @@ from swarm.planning.costmap import (
     robot_half_width_m,
 )
 from swarm.planning.costmap import KEEP_OUT as KEEP_OUT_CODE
+from swarm.planning.router import Router
 from swarm.robot.terrain import load_library
 from swarm.world.beachmap import BeachMap
 
@@ -95,6 +97,71 @@ def test_slope_steeper_than_the_mode_allows_is_impassable(robot):
     with pytest.raises(EndpointError, match=r"slope, steeper than the robot can climb on soft_sand"):
         r, c = np.argwhere(too_steep)[0]
         cm.check_endpoints(cm.center_of(r, c), (1.0, 1.0))
+
+
+def _gap_m(cells: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
+    """Brute force: the gap (cell units) from every cell's square to the nearest of `cells`."""
+    r, c = np.indices(shape)
+    out = np.full(shape, np.inf)
+    for rr, cc in cells:
+        out = np.minimum(out, np.hypot(np.maximum(np.abs(r - rr) - 1, 0), np.maximum(np.abs(c - cc) - 1, 0)))
+    return out
+
+
+def test_ground_above_land_too_steep_to_climb_is_kept_a_brink_margin_farther_off(robot):
+    """A dune face (steep soft sand rising north, flat on top), a boulder and steep surf (south):
+    every cell within the footprint of any impassable cell is blocked, and so is every cell above
+    the face (north of it) within the footprint plus `BRINK_MARGIN_M` of it, and no other cell.
+    Below the face, beside the boulder and by the steep surf (robots swim in through it) only the
+    footprint counts. Brute force over cell squares."""
+    cell, rows, cols = 0.5, 50, 30
+    lib = load_library()
+    terrain = np.full((rows, cols), 1, np.int8)  # wet hard sand
+    terrain[:6] = 0  # surf along the south edge
+    terrain[18:] = 2  # soft sand: the dune from its foot
+    terrain[12, 5] = 3  # a boulder
+    y = np.arange(rows) * cell
+    grade = np.where(y < 3.0, math.tan(math.radians(lib["surf"].max_climb_slope_deg + 4)), 0.02)
+    face = (y >= 10.0) & (y < 13.0)
+    grade = np.where(face, math.tan(math.radians(lib["soft_sand"].max_climb_slope_deg + 4)), grade)
+    elevation = np.repeat((np.cumsum(grade) * cell)[:, None], cols, axis=1).astype(np.float32)
+    classes = ("surf", "wet_hard_sand", "soft_sand", "boulder")
+    bm = BeachMap("dune", cell, (0.0, 0.0), classes, terrain, elevation)
+    cm = build_costmap(bm, robot)
+    steep_sand = (cm.reason == TOO_STEEP) & (terrain == 2)
+    assert steep_sand.any() and ((cm.reason == TOO_STEEP) & (terrain == 0)).any()
+    top = np.argwhere(steep_sand)[:, 0].max()
+
+    radius = cm.half_width_m + cm.resolution_m / 2
+    r, c = np.indices(cm.shape)
+    edge = np.minimum.reduce([r, c, rows - 1 - r, cols - 1 - c])
+    near_any = np.minimum(_gap_m(np.argwhere(cm.reason != FREE), cm.shape), edge) * cell < radius
+    brink = (_gap_m(np.argwhere(steep_sand), cm.shape) * cell < radius + BRINK_MARGIN_M) & (r > top)
+    assert (cm.blocked == (near_any | brink)).all()
+    assert (brink & ~near_any).any()  # the brink reaches past the footprint above the face
+    below = (_gap_m(np.argwhere(steep_sand), cm.shape) * cell < radius + BRINK_MARGIN_M) & (r < top)
+    assert (below & ~near_any).any() and not cm.blocked[below & ~near_any].any()
+    boulder_gap = _gap_m(np.array([[12, 5]]), cm.shape) * cell
+    beside_boulder = (boulder_gap >= radius) & (boulder_gap < radius + BRINK_MARGIN_M)
+    assert beside_boulder.any() and not cm.blocked[beside_boulder].any()
+    assert (build_costmap(bm, robot, brink_margin_m=0.0).blocked == near_any).all()
+
+    # a point on the brink, clear of the footprint: the one line says why, and a robot may still
+    # be sent there (to mark a mine), driving in off the route's end
+    row = int(np.flatnonzero(brink[:, 20] & ~near_any[:, 20])[0])
+    point = cm.center_of(row, 20)
+    assert cm.on_brink(*point) and not cm.on_brink(*cm.center_of(top + 12, 20))
+    with pytest.raises(EndpointError, match=r"keeps the centre .* from ground too steep to climb") as err:
+        cm.check_endpoints(point, cm.center_of(top + 12, 20))
+    assert "soft_sand on a" in str(err.value) and "\n" not in str(err.value)
+    route = Router(cm, seed=0).route(np.array(cm.center_of(top + 12, 20)), np.array(point))
+    np.testing.assert_array_equal(route[-1], point)
+    assert cm.is_free(route[:-1, 0], route[:-1, 1]).all()
+    # a route handed on with its brink point twice (a taker's piece) stitches to it once
+    start = np.array(cm.center_of(top + 12, 20))
+    pts, where = Router(cm, seed=0).stitch(np.array([start, point, point]))
+    np.testing.assert_array_equal(pts[-1], point)
+    assert where[2] == where[1] == len(pts) - 1
 
 
 def test_segment_cost_is_the_exact_integral(robot):

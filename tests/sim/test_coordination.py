@@ -729,7 +729,7 @@ def test_a_stand_by_waits_out_a_late_clearance_clear_of_the_mines_then_moves_in(
     path = write_mission(tmp_path, swarm={"count": 5}, tasks=[search, beacon], hazards=hazards, phases=phases)
     env = SwarmEnv(load_mission(path), action_mode="command")
     policy = ScriptedPolicy(env)
-    env.reset(seed=0)
+    env.reset(seed=3)  # a run in which the beacon's point lies in a found mine's standoff
     _run(env, policy, 895.0)
     found = sorted({it.obj for it in policy.items if it.kind == "mark"})
     safe_m = env.clearance.standoff_m + STANDOFF_MARGIN_M
