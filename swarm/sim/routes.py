@@ -41,9 +41,6 @@ class Routes:
         self.end = np.zeros(n, dtype=np.intp)
         self.cursor = np.zeros(n, dtype=np.intp)
         self.sensing_from = np.zeros(n, dtype=np.intp)  # the first point of a searcher's track
-        #: the robot was on its track when it was given this route (`steer_clear`): the leg to the
-        #: route's first point is track too
-        self.joined = np.zeros(n, dtype=bool)
 
     def set(self, i: int, waypoints: np.ndarray, sensing_from: int | None = None) -> None:
         """Give robot i a new route (k, 2); `sensing_from`: index of the first search-track point."""
@@ -58,25 +55,39 @@ class Routes:
         self.points = self._store[: self._used]
         self.start[i], self.end[i], self.cursor[i] = base, base + len(pts), base
         self.sensing_from[i] = base + (len(pts) if sensing_from is None else sensing_from)
-        self.joined[i] = False
 
     def steer_clear(self, i: int, xy: np.ndarray, avoid: np.ndarray, radius_m: float) -> None:
-        """Re-lay what is left of robot i's route (from where it stands) clear of `avoid` (`clear_of`),
-        keeping the part that is search track marked as such."""
+        """Re-lay what is left of robot i's route clear of `avoid` (`clear_of`), keeping the part
+        that is search track marked as such. The new route starts on the leg the robot is driving,
+        abreast of it (`leg_starts`), so the robot still follows that leg: started at the leg's far
+        end, it steered straight for a point up to 900 m away, and a cross-slope carried it metres
+        off its lane, off the ground it was to sweep and onto the obstacles the lane was laid clear of."""
         if self.cursor[i] >= self.end[i] or not len(avoid):
             return
         rest = self.points[self.cursor[i] : self.end[i]]
         if (rest == xy).all():
             return  # told to stay where it stands (a retreat from safe ground): no leg to side-step
-        new, where = clear_of(np.vstack([xy[None], rest]), avoid, radius_m)
+        here = self.leg_starts(np.array([i]), np.asarray(xy, dtype=np.float64).reshape(1, 2))
+        new, where = clear_of(np.vstack([here, rest]), avoid, radius_m)
         if len(new) == len(rest) + 1:
             return  # nothing in the way
         track = int(self.sensing_from[i]) - int(self.cursor[i])  # where the track starts in `rest`
         if track >= len(rest):
-            self.set(i, new[1:])
-        else:
-            self.set(i, new[1:], sensing_from=0 if track <= 0 else int(where[track + 1]) - 1)
-            self.joined[i] = track < 0  # on the track, driving a leg of it
+            self.set(i, new)
+        else:  # on the track (`here` is on a leg of it), or on the way to it
+            self.set(i, new, sensing_from=0 if track < 0 else int(where[track + 1]))
+
+    def leg_starts(self, robots: np.ndarray, xy: np.ndarray) -> np.ndarray:
+        """(k, 2) where each of `robots` (standing at `xy`) is along the leg it is driving: its
+        closest point on the leg, or where it stands on a route's first waypoint (no leg yet)."""
+        cur = self.cursor[robots]
+        on_leg = cur > self.start[robots]
+        a = self.points.take(np.where(on_leg, cur - 1, 0), axis=0) if len(self.points) else xy.copy()
+        b = self.points.take(np.where(on_leg, cur, 0), axis=0) if len(self.points) else xy.copy()
+        leg = b - a
+        ll = np.einsum("ij,ij->i", leg, leg)
+        t = np.clip(np.einsum("ij,ij->i", xy - a, leg) / np.where(ll > 0, ll, 1.0), 0.0, 1.0)
+        return np.where(on_leg[:, None], a + t[:, None] * leg, xy)
 
     def may_pass(self, robots: np.ndarray, xy: np.ndarray, point: np.ndarray, radius_m: float) -> np.ndarray:
         """Those of `robots` (standing at `xy`) whose rest of route might pass within `radius_m` of
@@ -95,7 +106,7 @@ class Routes:
         to = np.arange(int(counts.sum())) - np.repeat(first, counts) + np.repeat(cur, counts)
         b = self.points.take(to, axis=0)
         a = self.points.take(np.maximum(to - 1, 0), axis=0)
-        a[first] = xy  # each robot's first leg starts where it stands
+        a[first] = self.leg_starts(robots, xy)  # each robot's first leg starts abreast of it
         reach = 2.0 * radius_m
         near = np.all(np.minimum(a, b) - reach <= point, axis=1)
         near &= np.all(np.maximum(a, b) + reach >= point, axis=1)
@@ -116,16 +127,15 @@ class Routes:
         """What is left of robot i's search track `points[sensing_from:end]`: all of it until the
         robot is on it, then from where it stands on the leg it drives (`xy`; without it, from the
         leg's start) on. Taking the rest from the next waypoint dropped the leg the robot was on: a
-        searcher of mine_clear lost on its first lane, 680 m long, left all of that lane to nobody;
-        so did one lost on its way to a side-step (`joined`)."""
+        searcher of mine_clear lost on its first lane, 680 m long, left all of that lane to nobody.
+        A route re-laid around a find on the track starts abreast of the robot, on the track."""
         cur, first, end = int(self.cursor[i]), int(self.sensing_from[i]), int(self.end[i])
         if cur >= end:  # driven to its end (or no track)
             return np.empty((0, 2))
-        on_first_leg = self.joined[i] and cur == first
-        if cur <= first and not on_first_leg:
+        if cur <= first:
             return self.points[first:end].copy()
         if xy is None:
-            return self.points[cur if on_first_leg else cur - 1 : end].copy()
+            return self.points[cur - 1 : end].copy()
         return np.vstack([np.asarray(xy, dtype=np.float64).reshape(1, 2), self.points[cur:end]])
 
     def remaining_m(self, robots: np.ndarray, xy: np.ndarray) -> np.ndarray:

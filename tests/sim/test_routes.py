@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from scipy.spatial import cKDTree
 
 from swarm.sim.hazards import _armed_near, contact_reach2
@@ -209,8 +210,8 @@ def test_the_rest_of_a_track_is_all_of_it_then_from_where_the_robot_stands_then_
 
 
 def test_a_searcher_side_stepping_on_its_track_leaves_the_leg_to_the_side_step() -> None:
-    """20 m up its first lane a searcher side-steps a mine 40 m up: the re-laid route starts at the
-    side-step, and the rest of its track still starts where it stands (it used to start at the
+    """20 m up its first lane a searcher side-steps a mine 40 m up: the re-laid route starts where
+    it stands on the lane, so the rest of its track still starts there (it used to start at the
     side-step, and a searcher lost before it left those metres of lane to nobody). On its way to
     the lane, the track still starts at the lane's first point."""
     pts = np.array([[0.0, 0.0], [10.0, 0.0], [10.0, 100.0], [12.0, 100.0]])
@@ -224,15 +225,39 @@ def test_a_searcher_side_stepping_on_its_track_leaves_the_leg_to_the_side_step()
     np.testing.assert_array_equal(rest[0], here)
     assert len(rest) == len(whole) + 2  # the two side-step points
     np.testing.assert_array_equal(rest[-2:], pts[-2:])
-    np.testing.assert_array_equal(routes.remaining_track(0), rest[1:])  # from the side-step on
-    routes.cursor[0] += 1  # past the first side-step point: from where it stands, as on any leg
-    np.testing.assert_array_equal(routes.remaining_track(0, here)[1:], rest[2:])
+    np.testing.assert_array_equal(routes.remaining_track(0), rest)  # the route starts on the lane
+    routes.cursor[0] += 1  # on to the first side-step point: from where it stands, as on any leg
+    np.testing.assert_array_equal(routes.remaining_track(0, here)[1:], rest[1:])
     routes.set(0, pts, sensing_from=1)  # on its way to the lane
     routes.steer_clear(0, np.array([5.0, 0.0]), np.array([[7.0, 0.5]]), 1.0)
     track = routes.remaining_track(0, here)
     np.testing.assert_array_equal(track[0], pts[1])
     np.testing.assert_array_equal(track[-1], pts[-1])
     assert len(track) == len(pts) - 1
+
+
+def test_a_route_re_laid_around_a_find_keeps_the_robot_on_its_lane() -> None:
+    """A searcher pushed 2 m off a 400 m lane when a mine is found far ahead: its re-laid route
+    starts abreast of it on the lane, so it steers back onto the lane (pure pursuit on the leg,
+    `LOOKAHEAD_M` ahead), not for the side-step 300 m on, a line that runs metres off the lane it
+    was to sweep (full_conops: 4-5 m, into a boulder's ring, stuck in 3 of 32 runs)."""
+    lane = np.array([[0.0, 0.0], [400.0, 0.0], [400.0, 1.0], [0.0, 1.0]])
+    routes = Routes(1)
+    routes.set(0, lane, sensing_from=0)
+    routes.cursor[0] = 1
+    here = np.array([[50.0, -2.0]])
+    routes.steer_clear(0, here[0], np.array([[350.0, -0.3]]), 1.0)
+    np.testing.assert_array_equal(routes.remaining(0)[0], [50.0, 0.0])  # abreast, on the lane
+    routes.advance(here, np.array([True]))
+    aim = routes.steer_points(here)[0]
+    assert aim[1] == pytest.approx(0.0) and 50.0 <= aim[0] <= 50.0 + LOOKAHEAD_M + 1e-9
+    # back on the lane, it pursues the lane up to the side-step
+    on = np.array([[50.0, 0.0]])
+    routes.advance(on, np.array([True]))
+    aim = routes.steer_points(on)[0]
+    assert aim == pytest.approx([50.0 + LOOKAHEAD_M, 0.0], abs=0.01)
+    assert routes.in_track()[0]  # and all of it is still its track
+    np.testing.assert_array_equal(routes.remaining_track(0)[-3:], lane[1:])
 
 
 def test_a_route_whose_track_starts_at_its_first_point_is_on_its_track() -> None:
