@@ -416,7 +416,7 @@ class CostMap:
             )
         if self.blocked[row, col]:
             dist, what = self._nearest_obstacle(x, y)
-            if dist >= self.inflation_m:
+            if self.on_brink(x, y):
                 return (
                     f"is {dist:.2f} m from {what}: the planner keeps the centre "
                     f"{self.inflation_m + self.brink_margin_m:.2f} m from ground too steep to climb, "

@@ -80,14 +80,10 @@ class Routes:
     def leg_starts(self, robots: np.ndarray, xy: np.ndarray) -> np.ndarray:
         """(k, 2) where each of `robots` (standing at `xy`) is along the leg it is driving: its
         closest point on the leg, or where it stands on a route's first waypoint (no leg yet)."""
-        cur = self.cursor[robots]
-        on_leg = cur > self.start[robots]
-        a = self.points.take(np.where(on_leg, cur - 1, 0), axis=0) if len(self.points) else xy.copy()
-        b = self.points.take(np.where(on_leg, cur, 0), axis=0) if len(self.points) else xy.copy()
-        leg = b - a
-        ll = np.einsum("ij,ij->i", leg, leg)
-        t = np.clip(np.einsum("ij,ij->i", xy - a, leg) / np.where(ll > 0, ll, 1.0), 0.0, 1.0)
-        return np.where(on_leg[:, None], a + t[:, None] * leg, xy)
+        robots = np.asarray(robots, dtype=np.intp)
+        out = np.array(xy, dtype=np.float64).reshape(-1, 2)
+        _leg_starts(self.points, self.start[robots], self.end[robots], self.cursor[robots], out)
+        return out
 
     def may_pass(self, robots: np.ndarray, xy: np.ndarray, point: np.ndarray, radius_m: float) -> np.ndarray:
         """Those of `robots` (standing at `xy`) whose rest of route might pass within `radius_m` of
@@ -336,6 +332,20 @@ def _leg(points, start, cur, x, y):
     ux, uy = lx / maximum(length, 1e-12), ly / maximum(length, 1e-12)
     rx, ry = x - px, y - py
     return px, py, lx, ly, length, rx * ux + ry * uy, ux * ry - uy * rx
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _leg_starts(points, start, end, cursor, xy):
+    """`Routes.leg_starts`, robot by robot, in place on `xy`: each robot's closest point on its
+    leg (`_leg`), where it has one."""
+    for i in range(xy.shape[0]):
+        if cursor[i] >= end[i] or cursor[i] == start[i]:
+            continue
+        px, py, lx, ly, _, _, _ = _leg(points, start[i], cursor[i], xy[i, 0], xy[i, 1])
+        ll = lx * lx + ly * ly
+        if ll > 0:
+            t = minimum(maximum(((xy[i, 0] - px) * lx + (xy[i, 1] - py) * ly) / ll, 0.0), 1.0)
+            xy[i, 0], xy[i, 1] = px + t * lx, py + t * ly
 
 
 @numba.njit(cache=True, error_model="numpy")
