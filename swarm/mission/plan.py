@@ -379,6 +379,13 @@ def place_xy(beach_map, place) -> tuple[float, float]:
     return float(place[0]), float(place[1])
 
 
+def pickup_points(mission: Mission, launch_m: np.ndarray) -> np.ndarray:
+    """(k, 2) where survivors are picked up: the return's points, or the robots' launch points."""
+    points = mission.phases.return_to_sea.points
+    places = [place_xy(mission.beach_map, p) for p in points] if points else list(map(tuple, launch_m))
+    return np.unique(np.array(places, dtype=np.float64).reshape(-1, 2), axis=0)
+
+
 class _Free:
     """Free cells of the cost map, by connected region, with nearest-free-cell lookups."""
 
@@ -846,9 +853,6 @@ def _budget(mission: Mission, plan: MissionPlan) -> dict:
     back = mission.phases.return_to_sea
     way_back: dict[str, float] = {}
     returning = 0.0  # robots expected to last the beach: who sets off back, but for the markers
-    if back.enabled:
-        places = back.points or [tuple(rp.launch_m) for rp in plan.robots]
-        pickups = np.unique(np.array([place_xy(plan.beach_map, p) for p in places], np.float64), axis=0)
     lost_by_task: dict[str, float] = {}
     lasting: dict[str, float] = {}  # each search team's robots expected to last beach operations
     reserves_lasting: dict[str, float] = {}  # the same of its reserves alone
@@ -858,6 +862,9 @@ def _budget(mission: Mission, plan: MissionPlan) -> dict:
     # the routes as the robots drive them: stitched around blocked ground, with the simulator's seed
     router = Router(cm, seed=mission.seed)
     driven = dataclasses.replace(plan, robots=[exposure.drivable(rp, router) for rp in plan.robots])
+    if back.enabled:
+        launches = np.array([rp.launch_m for rp in plan.robots])
+        way_out = exposure.WayOut(mission, cm, pickup_points(mission, launches))
     ways = [exposure.way_in(mission, cm, rp, zone, ashore, mine_area, by_task) for rp in driven.robots]
     extra = exposure.off_plan_driving(mission, cm, driven, ways)
     for rp, way, (more_m, more_inside) in zip(driven.robots, ways, extra, strict=True):
@@ -877,7 +884,7 @@ def _budget(mission: Mission, plan: MissionPlan) -> dict:
         still = 1.0 - budget.lost_probability(whole)
         if back.enabled:
             returning += still
-            home = exposure.way_back(mission, cm, way.last_m, pickups, zone)
+            home = exposure.way_back(mission, cm, way.last_m, way_out, router, zone)
             for cause, p in budget.return_losses(mission, cm, home).items():
                 way_back[cause] = way_back.get(cause, 0.0) + still * p
         unseen_blasts += expected["beach"].get("mine", 0.0) * budget.unseen_share(mission, exposed.speed_mps)

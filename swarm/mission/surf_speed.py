@@ -33,7 +33,7 @@ from swarm.mission.schema import Mission
 from swarm.planning import CostMap
 from swarm.robot.params import GRAVITY_MPS2
 from swarm.robot.skid import HEADING, R, SkidModel, U, V, X, coeffs_for
-from swarm.robot.terrain import JET_SUBMERSION
+from swarm.robot.terrain import GROUND_SUBMERSION, JET_SUBMERSION
 from swarm.world.coastal import MIN_DEPTH_M, shoreward_direction, wave_shape
 
 #: Integration step of `mean_speed`, s: the simulator's physics substep (`swarm.sim.env.SimConfig`).
@@ -128,6 +128,8 @@ class SurfZone:
         self._classes = list(bm.terrain_classes)
         self._terrain = bm.terrain.astype(np.intp)
         self._current = np.array([mission.hazards.surf.longshore_current(), 0.0])
+        lib = mission.terrain_library
+        self._buoyancy = np.array([lib[c].buoyancy_fraction for c in self._classes])
         self._speeds: dict[tuple[int, int, int, float], float] = {}
 
     def crossing(self, polyline: np.ndarray, speed_mps: float | None = None) -> Crossing:
@@ -148,6 +150,23 @@ class SurfZone:
         hazard = -np.log1p(-surf.damage_probability(h[on]))
         total = float(seconds.sum())
         return Crossing(float(piece[on].sum()), total, float(seconds @ hazard) / total)
+
+    def landfall(self, polyline: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """`polyline` cut where a robot along it comes ashore, the start of its first half-cell
+        piece on ground that gives its wheels traction (`GROUND_SUBMERSION`), where the simulator
+        starts its beach phase: the part afloat, and the part from there on (one point if it never
+        grounds). The shallow water between there and dry ground is still among the breakers."""
+        pts = np.asarray(polyline, dtype=np.float64).reshape(-1, 2)
+        _, piece, row, col, _ = budget.samples_along(self.cm, pts)
+        ground = self._buoyancy[self._terrain[row, col]] < GROUND_SUBMERSION
+        if not ground.any():
+            return pts, pts[-1:]
+        at = float(piece[: int(np.argmax(ground))].sum())  # metres along the polyline
+        ends = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(pts, axis=0).T))])
+        j = min(int(np.searchsorted(ends, at, side="right")) - 1, len(pts) - 2)
+        t = (at - ends[j]) / max(ends[j + 1] - ends[j], 1e-12)
+        cut = pts[j] + t * (pts[j + 1] - pts[j])
+        return np.vstack([pts[: j + 1], cut]), np.vstack([cut, pts[j + 1 :]])
 
     def _made(self, row: np.ndarray, col: np.ndarray, bins: np.ndarray, speed: float) -> np.ndarray:
         """`mean_speed` over cells (row, col) on heading bins `bins`, from the cache or computed

@@ -113,6 +113,9 @@ JET_SPEED_MARGIN = 1.5
 #: A robot's jet works above this submersion (its cell's buoyancy fraction): its intake is under
 #: water. The simulator's controller turns the jet on there, and the plan's surf speeds assume it.
 JET_SUBMERSION = 0.3
+#: A robot's wheels find traction below this submersion: where it comes ashore. The simulator
+#: starts its beach phase there, and the plan counts the breakers beyond it as the beach's.
+GROUND_SUBMERSION = 0.3
 
 
 class UnknownModeError(InputError, KeyError):

@@ -238,12 +238,7 @@ class RunView:
         elif command != MARK and self.marking[i] >= 0:
             self.unmark(i)
         if command == RETURN and prev != RETURN and self.alive[i]:
-            self.routes.set(
-                i,
-                self.router.route(
-                    self.robot_state[i, :2], self.setup.nearest_pickup(self.robot_state[i, :2])
-                ),
-            )
+            self.routes.set(i, self.setup.way_out.route(self.router, self.robot_state[i, :2]))
             self._steer_clear_of_finds(i)
             if self.on_map[i] and self.phase[i] >= BEACH:
                 self.phase[i] = RETURNING

@@ -17,7 +17,8 @@ from scipy import ndimage
 from scipy.spatial import cKDTree
 
 from swarm.errors import SwarmError
-from swarm.mission.plan import MissionPlan, place_xy, radio_params
+from swarm.mission.exposure import WayOut
+from swarm.mission.plan import MissionPlan, pickup_points, place_xy, radio_params
 from swarm.mission.schema import Mission, Radio
 from swarm.planning.router import Router
 from swarm.sim import physics
@@ -94,13 +95,12 @@ class MissionSetup:
         self.swim_power_w = float(physics.jet_power_w(drag * swim * swim))
         self.hotel_power_w = m.hazards.battery.hotel_power_w
         self.capacity_wh = m.hazards.battery.capacity_wh
-        pickup = m.phases.return_to_sea.points
-        pickups = [place_xy(self.beach, p) for p in pickup] if pickup else list(map(tuple, self.launch_m))
-        self.pickup_m = np.unique(np.array(pickups), axis=0)
+        self.pickup_m = pickup_points(m, self.launch_m)
 
         self.speed_grid = self._speed_fraction_grid()
         self.router = Router(plan.costmap, seed=m.seed)
         self.initial_routes = [self._initial_route(rp) for rp in plan_robots]
+        self.way_out = WayOut(m, plan.costmap, self.pickup_m)
         self.router.calls = 0
 
     def _speed_fraction_grid(self) -> np.ndarray:
@@ -170,7 +170,3 @@ class MissionSetup:
         """Where a spare waits: the nearest free, dry cell clear of the water."""
         tree, pts = self._muster_cells
         return pts[int(tree.query(xy)[1])]
-
-    def nearest_pickup(self, xy: np.ndarray) -> np.ndarray:
-        d = np.hypot(*(self.pickup_m - xy).T)
-        return self.pickup_m[int(np.argmin(d))]

@@ -40,6 +40,7 @@ from numba.typed import List
 from scipy.spatial import cKDTree
 
 from swarm.errors import SwarmError
+from swarm.robot.terrain import GROUND_SUBMERSION
 from swarm.sim import comms, draws, hazards, sensing
 from swarm.sim.control import drive_toward
 from swarm.sim.criteria import MissionScore
@@ -67,8 +68,6 @@ from swarm.sim.setup import MissionSetup
 MARK_RADIUS_M = 1.0
 #: Above this submersion a returning robot is afloat beyond the surf and picked up.
 PICKUP_SUBMERSION = 0.99
-#: The wheels find traction (terrain mode on) below this submersion.
-GROUND_SUBMERSION = 0.3
 #: A robot at the end of its route drives back to it once it has drifted this far (m): robots
 #: creep down the beach's slope and are pushed by the swash, and a station (beacon, observation
 #: point) counts only within `swarm.sim.criteria.STATION_RADIUS_M` (3 m).
