@@ -245,8 +245,13 @@ class WayOut:
 
     def __init__(self, mission: Mission, cm: CostMap, pickups: np.ndarray) -> None:
         self.pickups = np.asarray(pickups, dtype=np.float64).reshape(-1, 2)
-        ashore = nearest_ashore(mission, cm, budget.surf_heights(mission) > 0)
-        self.exits = np.array([ashore(p)[-1] for p in self.pickups])
+        surf = budget.surf_heights(mission) > 0
+        ashore = nearest_ashore(mission, cm, surf)
+        water = np.array([mission.terrain_library[c].is_water for c in cm.terrain_classes])
+        r, c = cm.cell_of(self.pickups[:, 0], self.pickups[:, 1])
+        dry = ~cm.blocked[r, c] & ~surf[r, c] & ~water[cm.terrain[r, c].astype(np.intp)]
+        # a pick-up point on dry ground (a beach launch) is its own exit
+        self.exits = np.array([p if d else ashore(p)[-1] for p, d in zip(self.pickups, dry, strict=True)])
 
     def nearest(self, xy: np.ndarray) -> int:
         """The pick-up point nearest `xy`."""
@@ -257,6 +262,8 @@ class WayOut:
         exit, then out."""
         k = self.nearest(start)
         land = router.route(np.asarray(start, dtype=np.float64), self.exits[k])
+        if np.array_equal(self.exits[k], self.pickups[k]):
+            return land
         return np.vstack([land, self.pickups[k]])
 
 

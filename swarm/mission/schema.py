@@ -235,8 +235,9 @@ class ReturnToSea(_Model):
     points: list[Place] | None = Field(
         None,
         min_length=1,
-        description="Pick-up points: launch regions of the map, or [x, y] in the water, metres. "
-        "Default: the launch points.",
+        description="Pick-up points: launch regions of the map, or [x, y] in the water, metres; survivors "
+        "cross the surf in front of the nearest and are picked up afloat beyond it (on dry ground, a beach "
+        "launch's: on reaching it). Default: the launch points.",
     )
 
 

@@ -43,7 +43,7 @@ from swarm.errors import SwarmError
 from swarm.robot.terrain import GROUND_SUBMERSION
 from swarm.sim import comms, draws, hazards, sensing
 from swarm.sim.control import drive_toward
-from swarm.sim.criteria import MissionScore
+from swarm.sim.criteria import STATION_RADIUS_M, MissionScore
 from swarm.sim.mines import lay_mines
 from swarm.sim.routes import Routes, steer_point
 from swarm.sim.runview import (
@@ -759,6 +759,11 @@ class World:
 
     def _recover(self, terminated: np.ndarray) -> None:
         back = self.alive & (self.phase == RETURNING) & (self.submersion >= PICKUP_SUBMERSION)
+        ashore = self.setup.dry_pickups_m  # picked up by hand where the robots were put down
+        if len(ashore) and (self.alive & (self.phase == RETURNING)).any():
+            gap = self.robot_state[:, :, None, :2] - ashore[None, None]
+            near = (np.hypot(gap[..., 0], gap[..., 1]) <= STATION_RADIUS_M).any(axis=-1)
+            back |= self.alive & (self.phase == RETURNING) & near
         for b, i in zip(*np.nonzero(back), strict=True):
             run = self.runs[b]
             self.alive[b, i] = False

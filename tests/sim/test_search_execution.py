@@ -77,12 +77,17 @@ def test_a_searcher_that_finds_a_mine_searches_on_and_a_reserve_marks_it(tmp_pat
         env.advance({})
         found = [ev for ev in env.events if ev["kind"] == "detection" and ev["robot"] == f"robot_{searcher}"]
     assert found, "the searcher must find a mine for this test to mean anything"
-    track_left = len(env.routes.remaining_track(searcher))
+
+    def route_left_m() -> float:  # metres of its route (to its track and along it) from where it stands
+        return float(env.routes.remaining_m(np.array([searcher]), env.robot_state[searcher, :2][None])[0])
+
+    before = route_left_m()
     for _ in range(40):
         policy.update()
         env.advance({})
     assert env.marking[searcher] < 0 and len(env.routes.remaining_track(searcher)) > 0
-    assert len(env.routes.remaining_track(searcher)) <= track_left  # still on its track, further along
+    # it drives on along its route: 20 s at up to 0.6 m/s, less the few metres of a side-step
+    assert before - 12.5 < route_left_m() < before - 5.0
     marks = [ev for ev in env.events if ev["kind"] == "takeover" and ev["item"] == "mark"]
     assert marks and all(ev["robot"] != f"robot_{searcher}" for ev in marks)
 
