@@ -713,7 +713,7 @@ def _cmd_plan(args: argparse.Namespace) -> int:
     from swarm.mission import load_mission
     from swarm.mission.plan import plan_mission, write_plan
     from swarm.report.document import today
-    from swarm.report.plan_report import expected_detection, summary_rows, write_plan_report
+    from swarm.report.plan_report import expected_detection, robots_range, summary_rows, write_plan_report
     from swarm.sim.memory import check_fits
     from swarm.studies.sweep import check_study_size
 
@@ -792,10 +792,8 @@ def _cmd_plan(args: argparse.Namespace) -> int:
                     f"{evaluation['lost']['mean']:.1f} robots lost a run (plan {plan.expected_lost:.1f})"
                 )
             if evaluation.get("recovered") and plan.expected_recovered is not None:
-                low, high = plan.expected_recovered
-                said.append(
-                    f"{evaluation['recovered']['mean']:.1f} back at sea (plan {low:.1f} to {high:.1f})"
-                )
+                back = robots_range(plan.expected_recovered)
+                said.append(f"{evaluation['recovered']['mean']:.1f} back at sea (plan {back})")
             if evaluation.get("suggested_count"):
                 said.append(f"suggested size {evaluation['suggested_count']}")
             if evaluation.get("runs_needed"):

@@ -221,7 +221,7 @@ def plan_data(d: dict, date: str | None = None) -> dict:
     }
 
 
-def _range(pair: list[float]) -> str:
+def robots_range(pair: list[float]) -> str:
     """A plan's at-least and at-most robots ('0.0 to 12.2', or one figure when they agree)."""
     low, high = pair
     return f"{low:.1f}" if f"{low:.1f}" == f"{high:.1f}" else f"{low:.1f} to {high:.1f}"
@@ -280,9 +280,9 @@ def summary_table(data: dict) -> list[list[str]]:
         rows.append(["expected losses", text])
         ends = []
         if losses.get("expended") and losses["expended"][1] > 0:
-            ends.append(f"{_range(losses['expended'])} expended marking mines for the clearance")
+            ends.append(f"{robots_range(losses['expended'])} expended marking mines for the clearance")
         if losses.get("recovered") is not None:
-            ends.append(f"{_range(losses['recovered'])} back at sea")
+            ends.append(f"{robots_range(losses['recovered'])} back at sea")
         if ends:
             rows.append(["expected at the end", ", ".join(ends)])
     if s["expected_coverage"] is not None:
@@ -463,7 +463,7 @@ def evaluation_table(ev: dict, expected: dict | None = None) -> list[list[str]]:
         planned = None if expected is None else expected.get(key)
         if got and ((planned is not None and planned[1] > 0) or got["max"] > 0):
             text = f"mean {got['mean']:.1f}, {got['min']:g} to {got['max']:g}"
-            rows.append([label, text if planned is None else f"{text}; planned {_range(planned)}"])
+            rows.append([label, text if planned is None else f"{text}; planned {robots_range(planned)}"])
     for size in ev.get("sizes", []):
         rows.append(
             [

@@ -64,6 +64,9 @@ def test_the_table_puts_the_robots_back_at_sea_beside_the_plan_s() -> None:
     plan = {"hazards": True, "total": 4.2, "by_phase": {}, "recovered": [12.8, 23.61]}
     rows = dict(map(tuple, evaluation_table(ev, plan)))
     assert rows["robots back at sea per run"] == "mean 17.5, 9 to 21; planned 12.8 to 23.6"
+    # a range whose ends agree to the digit shown is one figure (relay's 8.7 back at sea)
+    agreed = dict(map(tuple, evaluation_table(ev, {**plan, "recovered": [8.71, 8.74]})))
+    assert agreed["robots back at sea per run"] == "mean 17.5, 9 to 21; planned 8.7"
     # a plan from before the plan said it: the simulation's figure alone
     assert dict(map(tuple, evaluation_table(ev)))["robots back at sea per run"] == "mean 17.5, 9 to 21"
     # no return to sea (an older evaluation, or nobody back and nobody expected): no row
