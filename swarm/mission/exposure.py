@@ -27,11 +27,16 @@ if TYPE_CHECKING:
     from swarm.mission.plan import MissionPlan, RobotPlan, SearchPlan
 
 
+def dry_ground(mission: Mission, cm: CostMap, surf: np.ndarray) -> np.ndarray:
+    """(rows, cols) free land cells outside the surf zone `surf`: where a robot is ashore."""
+    water = np.array([mission.terrain_library[c].is_water for c in cm.terrain_classes])
+    return ~cm.blocked & ~surf & ~water[cm.terrain.astype(np.intp)]
+
+
 def nearest_ashore(mission: Mission, cm: CostMap, surf: np.ndarray):
     """A function from a point to the segment from it to the centre of the nearest free land cell
     outside the surf zone (the point alone where there is none)."""
-    water = np.array([mission.terrain_library[c].is_water for c in cm.terrain_classes])
-    rows, cols = np.nonzero(~cm.blocked & ~surf & ~water[cm.terrain.astype(np.intp)])
+    rows, cols = np.nonzero(dry_ground(mission, cm, surf))
     if not len(rows):
         return lambda p: np.asarray(p, dtype=np.float64).reshape(1, 2)
     centres = np.column_stack(cm.center_of(rows, cols))
@@ -247,11 +252,12 @@ class WayOut:
         self.pickups = np.asarray(pickups, dtype=np.float64).reshape(-1, 2)
         surf = budget.surf_heights(mission) > 0
         ashore = nearest_ashore(mission, cm, surf)
-        water = np.array([mission.terrain_library[c].is_water for c in cm.terrain_classes])
         r, c = cm.cell_of(self.pickups[:, 0], self.pickups[:, 1])
-        dry = ~cm.blocked[r, c] & ~surf[r, c] & ~water[cm.terrain[r, c].astype(np.intp)]
-        # a pick-up point on dry ground (a beach launch) is its own exit
-        self.exits = np.array([p if d else ashore(p)[-1] for p, d in zip(self.pickups, dry, strict=True)])
+        #: (k,) the pick-up points on dry ground (a beach launch's), each its own exit
+        self.on_land = dry_ground(mission, cm, surf)[r, c]
+        self.exits = np.array(
+            [p if d else ashore(p)[-1] for p, d in zip(self.pickups, self.on_land, strict=True)]
+        )
 
     def nearest(self, xy: np.ndarray) -> int:
         """The pick-up point nearest `xy`."""
@@ -262,7 +268,7 @@ class WayOut:
         exit, then out."""
         k = self.nearest(start)
         land = router.route(np.asarray(start, dtype=np.float64), self.exits[k])
-        if np.array_equal(self.exits[k], self.pickups[k]):
+        if self.on_land[k]:
             return land
         return np.vstack([land, self.pickups[k]])
 

@@ -102,7 +102,7 @@ class MissionSetup:
         self.initial_routes = [self._initial_route(rp) for rp in plan_robots]
         self.way_out = WayOut(m, plan.costmap, self.pickup_m)
         #: pick-up points on dry ground (a beach launch's): a robot is picked up on reaching one
-        self.dry_pickups_m = self.pickup_m[(self.way_out.exits == self.pickup_m).all(axis=1)]
+        self.dry_pickups_m = self.pickup_m[self.way_out.on_land]
         self.router.calls = 0
 
     def _speed_fraction_grid(self) -> np.ndarray:
