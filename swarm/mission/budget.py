@@ -483,6 +483,24 @@ def p_criterion_met(criterion: float, mines: float, p: float, *, poisson: bool =
     return float(np.sum(stats.poisson.pmf(counts, mines) * met))
 
 
+def expected_markers(mines: float, p: float, lasting: np.ndarray, *, poisson: bool = False) -> float:
+    """E[min(found, lasting)]: the mines a team marks when each robot that lasts marks one found
+    mine. Found is binomial (round(`mines`), p), or Poisson with mean `mines` p for a density (a
+    Poisson count thinned by p); lasting is the Poisson binomial of each robot's probability of
+    lasting, `lasting`. Independent, so E[min(X, Y)] = sum over k >= 1 of P(X >= k) P(Y >= k): below
+    min(E[X], E[Y]) wherever either can fall short of the other (Jensen)."""
+    p = min(max(p, 0.0), 1.0)
+    pmf = np.ones(1)
+    for q in np.clip(np.asarray(lasting, np.float64), 0.0, 1.0):
+        pmf = np.convolve(pmf, [1.0 - q, q])
+    k = np.arange(1, len(pmf))
+    if not len(k):
+        return 0.0
+    at_least_lasting = pmf[::-1].cumsum()[::-1][1:]  # P(Y >= k), k = 1 .. robots
+    found_sf = stats.poisson.sf(k - 1, mines * p) if poisson else binom.sf(k - 1, round(mines), p)
+    return float(np.sum(found_sf * at_least_lasting))
+
+
 def mine_count_is_random(mission: Mission) -> bool:
     """Whether each run draws its own mine count (a density; `swarm.sim.mines.lay_mines`)."""
     return mission.hazards.mines.count is None

@@ -854,8 +854,8 @@ def _budget(mission: Mission, plan: MissionPlan) -> dict:
     way_back: dict[str, float] = {}
     returning = 0.0  # robots expected to last the beach: who sets off back, but for the markers
     lost_by_task: dict[str, float] = {}
-    lasting: dict[str, float] = {}  # each search team's robots expected to last beach operations
-    reserves_lasting: dict[str, float] = {}  # the same of its reserves alone
+    lasting: dict[str, list[float]] = {}  # each search team's robots' chances of lasting beach operations
+    reserves_lasting: dict[str, list[float]] = {}  # the same of its reserves alone
     orphaned_s: dict[str, float] = {}  # search time lost searchers leave undone
     spare_s: dict[str, float] = {}  # time the others have for it: reserves, searchers done early
     unseen_blasts = 0.0  # mines expected to go off before any sensor found them
@@ -892,9 +892,9 @@ def _budget(mission: Mission, plan: MissionPlan) -> dict:
             lost = budget.lost_probability(losses)
             task = way.search.task
             lost_by_task[task] = lost_by_task.get(task, 0.0) + lost
-            lasting[task] = lasting.get(task, 0.0) + still
+            lasting.setdefault(task, []).append(still)
             if rp.role != "search":
-                reserves_lasting[task] = reserves_lasting.get(task, 0.0) + still
+                reserves_lasting.setdefault(task, []).append(still)
             span = max(way.window_end_s - way.arrive_s, 0.0)
             run_s = way.search.design["search_time_s"]
             if rp.role == "search":  # its track left undone if it is lost, its slack if it is not
@@ -943,10 +943,11 @@ def _budget(mission: Mission, plan: MissionPlan) -> dict:
         if task.mark and task.clearance is not None:
             # a robot of the team marks each mine found and the clearance expends it: a reserve
             # that lasts, surely; a searcher only once its track and the lost tracks it can take
-            # are done (`swarm.sim.policy`), so at most every robot of the team that lasts
-            found = mines * after
-            markers[0] += min(found, reserves_lasting.get(s.task, 0.0))
-            markers[1] += min(found, lasting.get(s.task, 0.0))
+            # are done (`swarm.sim.policy`), so at most every robot of the team that lasts; the
+            # mines found and the robots that last both vary from run to run (`expected_markers`)
+            for end, team in enumerate((reserves_lasting, lasting)):
+                chances = team.get(s.task, [])
+                markers[end] += budget.expected_markers(mines, after, chances, poisson=random_count)
         searches[s.task] = {
             "criterion": criterion,
             "expected_detection": s.expected_detection,
