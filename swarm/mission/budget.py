@@ -501,6 +501,16 @@ def expected_markers(mines: float, p: float, lasting: np.ndarray, *, poisson: bo
     return float(np.sum(found_sf * at_least_lasting))
 
 
+def expected_excess(mean: float, sd: float) -> float:
+    """E[max(D, 0)] for D normal with `mean` and `sd`: mean Phi(mean/sd) + sd phi(mean/sd) (the
+    normal's partial expectation); max(mean, 0) when sd is 0. A sum over many robots, each lost
+    or not, is near normal; the mean of its positive part is above the positive part of its mean."""
+    if sd <= 0.0:
+        return max(mean, 0.0)
+    z = mean / sd
+    return float(mean * stats.norm.cdf(z) + sd * stats.norm.pdf(z))
+
+
 def mine_count_is_random(mission: Mission) -> bool:
     """Whether each run draws its own mine count (a density; `swarm.sim.mines.lay_mines`)."""
     return mission.hazards.mines.count is None

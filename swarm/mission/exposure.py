@@ -44,6 +44,18 @@ def nearest_ashore(mission: Mission, cm: CostMap, surf: np.ndarray):
     return lambda p: np.vstack([p, centres[tree.query(p)[1]]])
 
 
+@dataclass(frozen=True)
+class Trips:
+    """A search's expected trips off its tracks in a run (m), sensors on across the mine area."""
+
+    to_pieces_m: float  # to the pieces of the lost searchers' tracks, from where the takers wait
+    to_marks_m: float  # to the mines marked
+
+    @property
+    def total_m(self) -> float:
+        return self.to_pieces_m + self.to_marks_m
+
+
 @dataclass
 class WayIn:
     """One robot's planned exposure until its task's window ends, and where it is then."""
@@ -160,17 +172,22 @@ def way_in(mission: Mission, cm: CostMap, rp: RobotPlan, zone: SurfZone, ashore,
     return WayIn(exposure, search, arrive, ashore_s, end, last, track, track_inside, before, on_track)
 
 
-def off_plan_driving(mission: Mission, cm: CostMap, plan: MissionPlan, ways: list[WayIn]) -> list:
+def off_plan_driving(
+    mission: Mission, cm: CostMap, plan: MissionPlan, ways: list[WayIn]
+) -> tuple[list, dict[str, Trips]]:
     """What the scripted policy has robots drive beyond their planned routes, for each robot: the
-    metres on each class and in the mine area. A reserve takes over what a lost searcher left of
-    its track (`track_left`) in pieces of `budget.TAKEOVER_PIECE_M`, driving to each piece from
-    where it waits: its spot, or before a clearance outside every found mine's standoff and
-    margin. Each mine found takes one robot to mark it (a marker stays on its mine), and the marks
+    metres on each class and in the mine area; and for each search, the metres of its trips
+    across the mine area (their sensors on, off the tracks). A reserve takes over what a lost
+    searcher left of its track (`track_left`) in pieces of `budget.TAKEOVER_PIECE_M`, driving to
+    each piece from where it waits: its spot, or before a clearance outside every found mine's
+    standoff and margin. Each mine marked takes one robot there (a marker stays on its mine: a
+    robot of the team that lasts to each mine found, `budget.expected_markers`), and the marks
     come due late, when the robots are spread over the tracks: a mark's trip is the mean distance
     between two points of the tracks (mine_clear, 48 runs: 251 m a mark, against 296 m from this
     and the 60 m of the standoff the plan used to count). The work goes to the task's reserves,
     else to the mission's spares, else to its searchers, in equal shares."""
     out: list = [({}, 0.0) for _ in ways]
+    trips_by_task: dict[str, Trips] = {}
     for s in plan.search:
         task = task_of(mission, s)
         team = [k for k, w in enumerate(ways) if w.search is s]
@@ -201,19 +218,28 @@ def off_plan_driving(mission: Mission, cm: CostMap, plan: MissionPlan, ways: lis
             pieces = left_m / budget.TAKEOVER_PIECE_M + 0.5 * budget.lost_probability(losses)
             trips += pieces * reach
         inside += trips
+        to_pieces = trips
         if task.mark:
-            marks = s.design["mines_expected"] * s.expected_detection  # one to each mine found
+            lasting = [
+                1.0 - budget.lost_probability(budget.robot_losses(mission, cm, ways[k].exposure))
+                for k in team
+            ]
+            random_count = budget.mine_count_is_random(mission)
+            marks = budget.expected_markers(
+                s.design["mines_expected"], s.expected_detection, lasting, poisson=random_count
+            )
             to_mark = marks * max(mean_distance_apart([plan.robots[k].track_m for k in searchers]), reach)
             trips += to_mark
             # over searched ground, clear of the mines found: only those the search missed are left
             inside += to_mark * (1.0 - s.expected_detection)
+        trips_by_task[s.task] = Trips(to_pieces, trips - to_pieces)
         for k in searchers:
             for c, v in ways[k].track_m.items():
                 metres[c] = metres.get(c, 0.0) + trips * v / track_total
         share = {c: v / len(takers) for c, v in metres.items()}
         for k in takers:
             out[k] = (add_metres(out[k][0], share), out[k][1] + inside / len(takers))
-    return out
+    return out, trips_by_task
 
 
 def mean_distance_apart(tracks: list[np.ndarray], step_m: float = 5.0, most: int = 1500) -> float:

@@ -50,7 +50,7 @@ from swarm.mission.surf_speed import SurfZone
 from swarm.planning import CostMap, PlanningError, build_costmap, detection
 from swarm.planning.allocation import assign
 from swarm.planning.batch import plan_many
-from swarm.planning.coverage import boustrophedon, split_tracks, swath_coverage
+from swarm.planning.coverage import boustrophedon, detection_probability, split_tracks, swath_coverage
 from swarm.planning.detection import clip_tracks, drivable_segments
 from swarm.planning.radio import RadioParams, comm_range_m, link_margin_db
 from swarm.planning.relay import plan_relays, standable_grid
@@ -858,6 +858,7 @@ def _budget(mission: Mission, plan: MissionPlan) -> dict:
     reserves_lasting: dict[str, list[float]] = {}  # the same of its reserves alone
     orphaned_s: dict[str, float] = {}  # search time lost searchers leave undone
     spare_s: dict[str, float] = {}  # time the others have for it: reserves, searchers done early
+    swing_s2: dict[str, float] = {}  # the variance of the difference, robot by robot
     unseen_blasts = 0.0  # mines expected to go off before any sensor found them
     # the routes as the robots drive them: stitched around blocked ground, with the simulator's seed
     router = Router(cm, seed=mission.seed)
@@ -866,7 +867,7 @@ def _budget(mission: Mission, plan: MissionPlan) -> dict:
         launches = np.array([rp.launch_m for rp in plan.robots])
         way_out = exposure.WayOut(mission, cm, pickup_points(mission, launches))
     ways = [exposure.way_in(mission, cm, rp, zone, ashore, mine_area, by_task) for rp in driven.robots]
-    extra = exposure.off_plan_driving(mission, cm, driven, ways)
+    extra, trips_m = exposure.off_plan_driving(mission, cm, driven, ways)
     for rp, way, (more_m, more_inside) in zip(driven.robots, ways, extra, strict=True):
         exposed = dataclasses.replace(
             way.exposure,
@@ -899,17 +900,20 @@ def _budget(mission: Mission, plan: MissionPlan) -> dict:
             run_s = way.search.design["search_time_s"]
             if rp.role == "search":  # its track left undone if it is lost, its slack if it is not
                 left = exposure.track_left(mission, cm, way, losses)
+                slack = max(span - run_s, 0.0)
                 orphaned_s[task] = orphaned_s.get(task, 0.0) + left * run_s
-                spare_s[task] = spare_s.get(task, 0.0) + (1.0 - lost) * max(span - run_s, 0.0)
+                spare_s[task] = spare_s.get(task, 0.0) + (1.0 - lost) * slack
+                swing = (left / lost * run_s if lost > 0 else 0.0) + slack  # lost against not
             else:  # a reserve, while it lasts
                 spare_s[task] = spare_s.get(task, 0.0) + span * (1.0 - lost / 2.0)
+                swing = span / 2.0
+            swing_s2[task] = swing_s2.get(task, 0.0) + lost * (1.0 - lost) * swing**2
     criterion = mission.success.min_detection_fraction
     searches = {}
     markers = [0.0, 0.0]  # robots the clearances expend: at least, at most
     for s in plan.search:
         # every robot's sensor is on ashore: the planned routes of landers, spares and observers
-        # across the mine area count too (what robots drive off the plan, parking or taking
-        # over, does not: full_conops finds about 3 points more than this in simulation)
+        # across the mine area count too (the trips off the plan count below, after the losses)
         lines = [
             LineString(w)
             for rp in plan.robots
@@ -927,13 +931,26 @@ def _budget(mission: Mission, plan: MissionPlan) -> dict:
                 ground=cm,
             )
         need = s.design["searchers"] * s.design["search_time_s"]
-        undone = max(orphaned_s.get(s.task, 0.0) - spare_s.get(s.task, 0.0), 0.0)
+        # the work left over in a run, not in the mean run: losses vary from run to run; the
+        # drives to the lost tracks' pieces take their time out of the slack
+        trips = trips_m.get(s.task, exposure.Trips(0.0, 0.0))
+        travel_s = trips.to_pieces_m / mission.robot.wheel_speed_mps
+        undone = budget.expected_excess(
+            orphaned_s.get(s.task, 0.0) + travel_s - spare_s.get(s.task, 0.0),
+            math.sqrt(swing_s2.get(s.task, 0.0)),
+        )
         share = min(undone / need, 1.0) if need > 0 else 0.0
         # a strip whose track is left undone keeps what its neighbours' sensors reach into it
         lattice = "cookie_cutter" if model == "random" else model  # the sensor sees to a definite range
         kept = budget.undone_lane_kept(lattice, s.sweep_width_m, s.spacing_m, task.sensor.lateral_range)
         mines = s.design["mines_expected"]
         after = s.expected_detection * (1.0 - share * (1.0 - kept))
+        if trips.total_m > 0 and mine_area is not None and mine_area.area > 0:
+            # the trips off the tracks (to lost tracks' pieces, to the mines to mark) search the
+            # area at random, sensors on: Koopman's 1 - exp(-W L / A) of what the tracks left
+            after += (1.0 - after) * detection_probability(
+                "random", s.sweep_width_m, None, trips.total_m, mine_area.area
+            )
         if mines > 0:
             after = max(0.0, after - unseen_blasts / mines)
         random_count = budget.mine_count_is_random(mission)

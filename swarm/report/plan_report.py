@@ -266,7 +266,8 @@ def summary_table(data: dict) -> list[list[str]]:
             rows.append(
                 [
                     f"after losses {sp['task']}",
-                    f"expected detection {sp['expected_detection_after_losses']:.1%}; P(criterion met) "
+                    f"expected detection {sp['expected_detection_after_losses']:.1%} (trips off the "
+                    f"tracks included); P(criterion met) "
                     f"{_num(sp['p_criterion_met'], '.2f')} as planned, "
                     f"{_num(sp['p_criterion_met_after_losses'], '.2f')} after losses",
                 ]

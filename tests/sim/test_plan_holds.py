@@ -98,7 +98,10 @@ def test_the_robots_lost_in_each_phase_are_the_plan_s_expected_losses(name: str,
     plan's ranges with the same margins. The plan once put 120 s of breakers on every robot,
     beach-launched recon's too (1.2 robots where none is lost) and relay's 4.0 where 0.8 are, left
     out the return to sea (full_conops: 3.0 lost a run), and sent every full_conops survivor home
-    (23.6 back) where the policy's markers leave 16.2 (100 runs)."""
+    (23.6 back) where the policy's markers leave 16.2 (100 runs). The mines found lie within three
+    standard errors (and half a point) of the plan's detection after losses: mine_clear's plan
+    said 93.0% where 100 runs find 95.7%, before it counted the trips off the tracks (to lost
+    tracks, to the mines to mark) as random search."""
     mission = load_mission(MISSIONS / f"{name}.yaml")
     plan = plan_mission(mission, seed=mission.seed, workers=1)
     expected = {p: sum(c.values()) for p, c in plan.budget["expected_losses"].items()}
@@ -123,6 +126,14 @@ def test_the_robots_lost_in_each_phase_are_the_plan_s_expected_losses(name: str,
             per_run.mean(),
             low,
             high,
+        )
+    for task, search in plan.budget["search"].items():  # the same runs find what the plan expects
+        found = np.array([log.outcome["criteria"]["detection"]["value"] for log in logs])
+        se = found.std(ddof=1) / np.sqrt(len(found))
+        assert abs(found.mean() - search["expected_detection_after_losses"]) <= 3 * se + 0.005, (
+            task,
+            found.mean(),
+            search,
         )
 
 
