@@ -713,7 +713,7 @@ def _cmd_plan(args: argparse.Namespace) -> int:
     from swarm.mission import load_mission
     from swarm.mission.plan import plan_mission, write_plan
     from swarm.report.document import today
-    from swarm.report.plan_report import expected_detection, robots_range, summary_rows, write_plan_report
+    from swarm.report.plan_report import robots_range, summary_rows, write_plan_report
     from swarm.sim.memory import check_fits
     from swarm.studies.sweep import check_study_size
 
@@ -784,7 +784,7 @@ def _cmd_plan(args: argparse.Namespace) -> int:
                 f"({evaluation['wilson_low']:.2f} to {evaluation['wilson_high']:.2f}), "
                 f"target {evaluation['target']:g}"
             ]
-            found, planned = (evaluation.get("detection") or {}).get("mean"), expected_detection(plan)
+            found, planned = (evaluation.get("detection") or {}).get("mean"), plan.expected_detection
             if found is not None and planned is not None:
                 said.append(f"detection {found:.1%} a run (plan {planned:.1%})")
             if plan.expected_lost is not None:

@@ -173,6 +173,24 @@ class MissionPlan:
         return float(self.budget["expected_lost"]) if self.budget.get("hazards") else None
 
     @property
+    def expected_detection(self) -> float | None:
+        """The share of the mines the plan expects found after its losses (`budget`), over every
+        search weighted by its expected mines (each search's own where none is expected), as a
+        run's detection criterion counts them; None without a search."""
+        found = self.budget.get("search") or {}
+        values = [
+            (d["expected_detection"] if d["expected_detection_after_losses"] is None
+             else d["expected_detection_after_losses"], s.design.get("mines_expected", 0.0))
+            for s in self.search if (d := found.get(s.task)) is not None
+        ]  # fmt: skip
+        if not values:
+            return None
+        weights = np.array([w for _, w in values])
+        if weights.sum() <= 0:
+            weights = np.ones(len(values))
+        return float(np.average([v for v, _ in values], weights=weights))
+
+    @property
     def expected_recovered(self) -> tuple[float, float] | None:
         """Robots the plan expects back at sea (`budget`), at least and at most: the survivors
         less the markers the clearance expends (all the team can spare, or its reserves alone)

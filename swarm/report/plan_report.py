@@ -385,18 +385,6 @@ def robot_table(data: dict) -> list[list[str]]:
     return rows
 
 
-def expected_detection(plan: MissionPlan) -> float | None:
-    """What a simulated run's detection should come to by the plan: its search's expected
-    detection after its losses (before them, when it has no loss budget); None unless the plan has
-    exactly one search, the one the detection criterion counts."""
-    searches = _search(plan.as_dict())
-    if len(searches) != 1:
-        return None
-    (s,) = searches
-    after = s["expected_detection_after_losses"]
-    return s["expected_detection"] if after is None else after
-
-
 def summary_rows(plan: MissionPlan) -> list[list[str]]:
     """The summary table of a plan in memory (what `swarm plan` prints)."""
     return summary_table(plan_data(plan.as_dict()))

@@ -135,9 +135,15 @@ def runs_for_width(point: dict, width: float = WIDTH) -> object:
 def study_rows(summary: dict) -> list[list[str]]:
     """One row per parameter point: its swept values, runs, successes, success rate, Wilson interval,
     whether the interval's lower bound reaches the target, median time to success, mean robots lost
-    and the plan's expected losses, the mean mines cleared and robots back at sea where any point
-    has some, and the runs a ±0.05 interval would need."""
+    and the plan's expected losses, the mean share of the mines found and the plan's where a point
+    has a search, the mean mines cleared and robots back at sea where any point has some, and the
+    runs a ±0.05 interval would need."""
     keys = swept_keys(summary)
+    found = [
+        (key, title)
+        for key, title in (("detection_mean", "mean detection"), ("planned_detection", "plan's detection"))
+        if any(_number(p.get("detection_mean")) is not None for p in summary.get("points") or [])
+    ]
     ends = [
         (key, title)
         for key, title in (
@@ -160,6 +166,7 @@ def study_rows(summary: dict) -> list[list[str]]:
             "median time to success (s)",
             "mean lost per run",
             "plan's expected losses",
+            *(title for _, title in found),
             *(title for _, title in ends),
             f"runs for ±{WIDTH:g}",
         ]
@@ -183,6 +190,7 @@ def study_rows(summary: dict) -> list[list[str]]:
                 _seconds(median),
                 _fmt(p.get("lost_mean"), ".2f"),
                 _fmt(p.get("planned_lost"), ".2f"),
+                *(_fmt(p.get(key), ".1%") for key, _ in found),
                 *(_fmt(p.get(key), ".2f") for key, _ in ends),
                 MISSING if needed is None else f"{needed:.0f}",
             ]

@@ -128,6 +128,7 @@ def _row(task: RunTask, mission, plan, log, runtime_s: float) -> dict:
     for c in CAUSES:
         row[f"lost_{c}"] = causes.get(c, 0)
     row["planned_lost"] = plan.expected_lost
+    row["planned_detection"] = plan.expected_detection
     summary = log.summary()
     row.update({c: int(summary[c]) for c in MINE_COUNTS})
     row.update({c: int(summary["end_states"].get(c, 0)) for c in END_COUNTS})

@@ -201,14 +201,16 @@ def _batch_sizes(spec: StudySpec, tasks: list[RunTask], batch: int | None, worke
 
 def summarize(spec: StudySpec, table: pa.Table) -> dict:
     """Per point: success rate with its Wilson interval, completion times, losses by cause and
-    phase, mean mines cleared and robots back at sea, runs for narrower intervals; the required
-    value of the first swept key; totals."""
+    phase beside the plan's, the mines found beside the plan's, mean mines cleared and robots back
+    at sea, runs for narrower intervals; the required value of the first swept key; totals."""
     cols = table.to_pydict()
     point_of = np.asarray(cols["point"], dtype=np.int64)
     success = np.asarray(cols["success"], dtype=bool)
     completed = np.array([np.nan if v is None else v for v in cols["completed_s"]], dtype=np.float64)
     losses = cols["losses"]
     planned = cols.get("planned_lost") or [None] * len(point_of)  # absent from older tables
+    found = cols.get("value_detection") or [None] * len(point_of)
+    planned_found = cols.get("planned_detection") or [None] * len(point_of)
     ends = {c: cols.get(c) or [None] * len(point_of) for c in ("mines_cleared", "recovered")}
     out_points = []
     for p, params in enumerate(spec.points()):
@@ -231,6 +233,11 @@ def summarize(spec: StudySpec, table: pa.Table) -> dict:
                 "losses_by_phase": by_phase,
                 "lost_mean": float(np.mean([len(losses[i]) for i in mine])) if n else 0.0,
                 "planned_lost": next((planned[i] for i in mine if planned[i] is not None), None),
+                # the mines found a run against the plan's expectation after its losses
+                "detection_mean": _mean_of([found[i] for i in mine]),
+                "planned_detection": next(
+                    (planned_found[i] for i in mine if planned_found[i] is not None), None
+                ),
                 # how the mission ended besides its losses: mines the clearance set off, robots
                 # picked up at sea (None from tables written before they were counted)
                 **{f"{c}_mean": _mean_of([v[i] for i in mine]) for c, v in ends.items()},

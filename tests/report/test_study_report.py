@@ -425,3 +425,34 @@ def test_the_points_say_the_mines_cleared_and_the_robots_back_where_a_mission_ha
         {"points": [{**p, "mines_cleared_mean": 0.0, "recovered_mean": None} for p in points]}
     )[0]
     assert "mean mines cleared" not in header and "mean back at sea" not in header
+
+
+def test_the_points_set_the_mines_found_beside_the_plan_s_expectation() -> None:
+    """The summary's per-point mean of `value_detection` (the runs' share of the mines found) and
+    its plan's `planned_detection`, and the report's columns for them, as percentages, only where
+    a point has a search; a table written before the plan's column existed has no plan's value."""
+    from swarm.studies.study import StudySpec, summarize
+    from swarm.studies.sweep import parse_sweeps
+
+    spec = StudySpec(
+        str(ROOT / "missions" / "mine_clear.yaml"), 2, parse_sweeps(["swarm.count=12,24"]), seed=1
+    )
+    base = {
+        "point": pa.array([0, 0, 1, 1], pa.int32()),
+        "run": pa.array([0, 1, 0, 1], pa.int32()),
+        "success": [False, True, True, True],
+        "losses": [[]] * 4,
+        "completed_s": [None, 2.0, 1.0, 3.0],
+        "value_detection": [0.80, 0.90, 0.95, None],  # the last run's mission ended before any count
+    }
+    table = pa.table({**base, "planned_detection": [0.829, 0.829, 0.948, 0.948]})
+    points = summarize(spec, table)["points"]
+    assert [p["detection_mean"] for p in points] == [pytest.approx(0.85), pytest.approx(0.95)]
+    assert [p["planned_detection"] for p in points] == [0.829, 0.948]
+    rows = study_rows({"points": points})
+    assert column(rows, "mean detection") == ["85.0%", "95.0%"]
+    assert column(rows, "plan's detection") == ["82.9%", "94.8%"]
+    older = summarize(spec, pa.table(base))["points"]
+    assert [p["planned_detection"] for p in older] == [None, None]
+    no_search = [{**p, "detection_mean": None, "planned_detection": None} for p in points]
+    assert "mean detection" not in study_rows({"points": no_search})[0]

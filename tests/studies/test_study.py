@@ -628,6 +628,8 @@ def test_each_point_carries_its_plan_s_expected_losses(tmp_path) -> None:
         expected = plan_mission(m, seed=m.seed, workers=1).budget["expected_lost"]
         assert rows == [pytest.approx(expected)] * 2
         assert point["planned_lost"] == pytest.approx(expected)
+    # landing has no search: no plan's detection to set beside the runs'
+    assert cols["planned_detection"] == [None] * table.num_rows
 
 
 def test_a_held_key_is_no_sweep_and_the_answer_says_what_was_held(tiny, tmp_path, capsys) -> None:
@@ -715,3 +717,31 @@ def test_a_row_counts_the_mines_and_how_every_robot_ended(tmp_path) -> None:
     )
     assert row["recovered"] >= 1
     assert row["lost"] + row["expended"] + row["recovered"] <= row["robots"] == 8
+
+
+def test_a_plan_s_detection_weighs_its_searches_by_their_mines() -> None:
+    """`MissionPlan.expected_detection`: each search's detection after losses (before them where
+    the hazards are off), weighted by the mines it expects, as a run's detection criterion counts
+    the mines of every search together; equal weights where no mines are expected, None without a
+    search."""
+    from types import SimpleNamespace
+
+    from swarm.mission.plan import MissionPlan
+
+    def plan(*searches: tuple[str, float, float | None, float]) -> SimpleNamespace:
+        return SimpleNamespace(
+            search=[SimpleNamespace(task=t, design={"mines_expected": m}) for t, _, _, m in searches],
+            budget={
+                "search": {
+                    t: {"expected_detection": d, "expected_detection_after_losses": a}
+                    for t, d, a, _ in searches
+                }
+            },
+        )
+
+    detection = MissionPlan.expected_detection.fget
+    assert detection(plan(("a", 0.9, 0.8, 30.0), ("b", 0.99, 0.95, 10.0))) == pytest.approx(
+        (0.8 * 30 + 0.95 * 10) / 40
+    )
+    assert detection(plan(("a", 0.9, None, 0.0), ("b", 0.7, None, 0.0))) == pytest.approx(0.8)
+    assert detection(SimpleNamespace(search=[], budget={})) is None
