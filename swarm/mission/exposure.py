@@ -207,8 +207,9 @@ def off_plan_driving(
         trips = 0.0  # metres of trips, each at least the reach
         metres: dict[str, float] = {}
         inside = 0.0
+        losses_of = {k: budget.robot_losses(mission, cm, ways[k].exposure) for k in team}
         for k in searchers:
-            losses = budget.robot_losses(mission, cm, ways[k].exposure)
+            losses = losses_of[k]
             left = track_left(mission, cm, ways[k], losses)
             for c, v in ways[k].track_m.items():
                 metres[c] = metres.get(c, 0.0) + left * v
@@ -220,10 +221,7 @@ def off_plan_driving(
         inside += trips
         to_pieces = trips
         if task.mark:
-            lasting = [
-                1.0 - budget.lost_probability(budget.robot_losses(mission, cm, ways[k].exposure))
-                for k in team
-            ]
+            lasting = [1.0 - budget.lost_probability(losses_of[k]) for k in team]
             random_count = budget.mine_count_is_random(mission)
             marks = budget.expected_markers(
                 s.design["mines_expected"], s.expected_detection, lasting, poisson=random_count

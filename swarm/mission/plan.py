@@ -150,6 +150,14 @@ class RelayPlanOut:
         return np.array(out)
 
 
+def detection_to_expect(search: dict) -> float:
+    """What a run's share of a search's mines found should come to by the plan: its detection
+    after the losses, or before them where the plan has no loss budget (a search's entry of the
+    budget, or of the plan report's data: `expected_detection[_after_losses]`)."""
+    after = search["expected_detection_after_losses"]
+    return search["expected_detection"] if after is None else after
+
+
 @dataclass
 class MissionPlan:
     mission: str
@@ -179,10 +187,10 @@ class MissionPlan:
         run's detection criterion counts them; None without a search."""
         found = self.budget.get("search") or {}
         values = [
-            (d["expected_detection"] if d["expected_detection_after_losses"] is None
-             else d["expected_detection_after_losses"], s.design.get("mines_expected", 0.0))
-            for s in self.search if (d := found.get(s.task)) is not None
-        ]  # fmt: skip
+            (detection_to_expect(d), s.design.get("mines_expected", 0.0))
+            for s in self.search
+            if (d := found.get(s.task)) is not None
+        ]
         if not values:
             return None
         weights = np.array([w for _, w in values])

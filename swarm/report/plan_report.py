@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from swarm.mission import budget
-from swarm.mission.plan import MissionPlan
+from swarm.mission.plan import MissionPlan, detection_to_expect
 from swarm.report import plan_figures as figs
 from swarm.report.document import MISSING, Figure, Report, Table, header, verdict
 
@@ -139,12 +139,11 @@ def _checks(search: list[dict], relay: dict | None, losses: dict | None, criteri
     target = criteria.get("min_detection_fraction")
     if target is not None:
         for s in search:
-            after = s["expected_detection_after_losses"]
-            value = s["expected_detection"] if after is None else after
-            what = "expected detection" if after is None else "expected detection after losses"
+            value = detection_to_expect(s)
+            after = "" if s["expected_detection_after_losses"] is None else " after losses"
             out.append(
                 {
-                    "criterion": f"{what} ({s['task']})",
+                    "criterion": f"expected detection{after} ({s['task']})",
                     "value": value,
                     "target": target,
                     "unit": "fraction",
@@ -522,10 +521,7 @@ def plan_report(
         )
         searched = bool(evaluation.get("detection_values"))
         # what a run with the plan's losses should show: the simulation loses robots too
-        after_losses = [
-            s["expected_detection"] if (a := s["expected_detection_after_losses"]) is None else a
-            for s in data["search"]
-        ]
+        after_losses = [detection_to_expect(s) for s in data["search"]]
         losses = data.get("losses")
         expected_lost = losses["total"] if losses is not None and losses["hazards"] else None
         blocks.append(

@@ -758,12 +758,12 @@ class World:
                         terminated[b, i] = True
 
     def _recover(self, terminated: np.ndarray) -> None:
-        back = self.alive & (self.phase == RETURNING) & (self.submersion >= PICKUP_SUBMERSION)
+        returning = self.alive & (self.phase == RETURNING)
+        back = returning & (self.submersion >= PICKUP_SUBMERSION)
         ashore = self.setup.dry_pickups_m  # picked up by hand where the robots were put down
-        if len(ashore) and (self.alive & (self.phase == RETURNING)).any():
+        if len(ashore) and returning.any():
             gap = self.robot_state[:, :, None, :2] - ashore[None, None]
-            near = (np.hypot(gap[..., 0], gap[..., 1]) <= STATION_RADIUS_M).any(axis=-1)
-            back |= self.alive & (self.phase == RETURNING) & near
+            back |= returning & (np.hypot(gap[..., 0], gap[..., 1]) <= STATION_RADIUS_M).any(axis=-1)
         for b, i in zip(*np.nonzero(back), strict=True):
             run = self.runs[b]
             self.alive[b, i] = False
