@@ -713,7 +713,7 @@ def _cmd_plan(args: argparse.Namespace) -> int:
     from swarm.mission import load_mission
     from swarm.mission.plan import plan_mission, write_plan
     from swarm.report.document import today
-    from swarm.report.plan_report import robots_range, summary_rows, write_plan_report
+    from swarm.report.plan_report import against_plan, robots_range, summary_rows, write_plan_report
     from swarm.sim.memory import check_fits
     from swarm.studies.sweep import check_study_size
 
@@ -785,11 +785,24 @@ def _cmd_plan(args: argparse.Namespace) -> int:
                 f"target {evaluation['target']:g}"
             ]
             found, planned = (evaluation.get("detection") or {}).get("mean"), plan.expected_detection
+            confidence = evaluation["confidence"]
             if found is not None and planned is not None:
-                said.append(f"detection {found:.1%} a run (plan {planned:.1%})")
+                said.append(
+                    f"detection {found:.1%} a run"
+                    + against_plan(
+                        planned, evaluation.get("detection_interval"), ".1%", confidence, more_is_better=True
+                    )
+                )
             if plan.expected_lost is not None:
                 said.append(
-                    f"{evaluation['lost']['mean']:.1f} robots lost a run (plan {plan.expected_lost:.1f})"
+                    f"{evaluation['lost']['mean']:.1f} robots lost a run"
+                    + against_plan(
+                        plan.expected_lost,
+                        evaluation.get("lost_interval"),
+                        ".1f",
+                        confidence,
+                        more_is_better=False,
+                    )
                 )
             if evaluation.get("recovered") and plan.expected_recovered is not None:
                 back = robots_range(plan.expected_recovered)
@@ -1122,7 +1135,7 @@ def _add_study_command(commands) -> None:
 
 def _cmd_study(args: argparse.Namespace) -> int:
 
-    from swarm.report.study_report import answer, study_rows, write_study_report
+    from swarm.report.study_report import answer, points_note, study_rows, write_study_report
     from swarm.studies.backends import default_workers
     from swarm.studies.study import StudySpec, run_study
     from swarm.studies.sweep import Sweep, check_points, check_study_size, parse_sweeps
@@ -1186,6 +1199,7 @@ def _cmd_study(args: argparse.Namespace) -> int:
         print(answer(summary))
         print()
         print(_table(study_rows(summary)))
+        print(points_note(summary))
         if summary["losses_by_cause"]:
             print()
             print("losses: " + ", ".join(f"{c} {n}" for c, n in summary["losses_by_cause"].items()))

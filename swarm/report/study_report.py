@@ -23,6 +23,7 @@ from swarm.report import study_figures as figs
 from swarm.report.document import Figure, Report, Table, Text, header, jsonable, seconds, verdict
 from swarm.report.study_figures import KEY_NOUNS, format_value, point_label, swept_keys
 from swarm.sim.hazards import CAUSE_DESCRIPTIONS, CAUSES
+from swarm.studies import stats
 from swarm.world.beachmap import BeachMap
 
 #: The interval half-width whose run count the point table shows (summary key "0.05").
@@ -132,6 +133,45 @@ def runs_for_width(point: dict, width: float = WIDTH) -> object:
     return None
 
 
+def _bounds(interval: object) -> tuple[float, float] | None:
+    """A summary's t interval of a mean as two numbers; None where there is none (one run, or a
+    summary written before intervals were kept)."""
+    if not isinstance(interval, list | tuple) or len(interval) != 2:
+        return None
+    low, high = (_number(v) for v in interval)
+    return None if low is None or high is None else (low, high)
+
+
+def _mean_cell(mean: object, interval: object, spec: str) -> str:
+    """'9.70 ± 0.56': a per-run mean and the half-width of its t interval (`stats.mean_interval`),
+    the bare mean without one."""
+    text, bounds = _fmt(mean, spec), _bounds(interval)
+    if text == MISSING or bounds is None:
+        return text
+    return f"{text} ± {format((bounds[1] - bounds[0]) / 2, spec).rstrip('%')}"
+
+
+def _plan_cell(planned: object, interval: object, spec: str, *, more_is_better: bool = True) -> str:
+    """'9.51 (agrees)': the plan's value and where it lies against the runs' t interval of the mean
+    (`stats.agreement`: agrees, optimistic, conservative), the bare value without one."""
+    text, bounds = _fmt(planned, spec), _bounds(interval)
+    if text == MISSING or bounds is None:
+        return text
+    return f"{text} ({stats.agreement(_number(planned), bounds, more_is_better=more_is_better)})"
+
+
+def points_note(summary: dict) -> str:
+    """What the point table's ± and the plan's verdicts mean."""
+    confidence = summary.get("confidence", 0.95)
+    return (
+        f"A mean's ± is the half-width of its {percent(confidence)} t interval over the point's runs. "
+        "The plan's expectation agrees when it lies inside that interval; outside it, it is optimistic "
+        "when it promises fewer robots lost or more mines found than the runs give, conservative when "
+        f"fewer found or more lost. A plan that holds misses its interval by chance in about "
+        f"{percent(1 - confidence)} of points: more runs tell chance from a real miss."
+    )
+
+
 def study_rows(summary: dict) -> list[list[str]]:
     """One row per parameter point: its swept values, runs, successes, success rate, Wilson interval,
     whether the interval's lower bound reaches the target, median time to success, mean robots lost
@@ -140,8 +180,8 @@ def study_rows(summary: dict) -> list[list[str]]:
     runs a ±0.05 interval would need."""
     keys = swept_keys(summary)
     found = [
-        (key, title)
-        for key, title in (("detection_mean", "mean detection"), ("planned_detection", "plan's detection"))
+        title
+        for title in ("mean detection", "plan's detection")
         if any(_number(p.get("detection_mean")) is not None for p in summary.get("points") or [])
     ]
     ends = [
@@ -166,7 +206,7 @@ def study_rows(summary: dict) -> list[list[str]]:
             "median time to success (s)",
             "mean lost per run",
             "plan's expected losses",
-            *(title for _, title in found),
+            *found,
             *(title for _, title in ends),
             f"runs for ±{WIDTH:g}",
         ]
@@ -188,9 +228,16 @@ def study_rows(summary: dict) -> list[list[str]]:
                 f"{_fmt(p.get('wilson_low'), '.3f')} to {_fmt(p.get('wilson_high'), '.3f')}",
                 meets,
                 _seconds(median),
-                _fmt(p.get("lost_mean"), ".2f"),
-                _fmt(p.get("planned_lost"), ".2f"),
-                *(_fmt(p.get(key), ".1%") for key, _ in found),
+                _mean_cell(p.get("lost_mean"), p.get("lost_interval"), ".2f"),
+                _plan_cell(p.get("planned_lost"), p.get("lost_interval"), ".2f", more_is_better=False),
+                *(
+                    [
+                        _mean_cell(p.get("detection_mean"), p.get("detection_interval"), ".1%"),
+                        _plan_cell(p.get("planned_detection"), p.get("detection_interval"), ".1%"),
+                    ]
+                    if found
+                    else []
+                ),
                 *(_fmt(p.get(key), ".2f") for key, _ in ends),
                 MISSING if needed is None else f"{needed:.0f}",
             ]
@@ -345,7 +392,7 @@ def study_report(
     if note:
         blocks.append(Text("How the answer was found", str(note)))
     blocks.append(Table("Study", settings_rows(summary), header=False))
-    blocks.append(Table("Parameter points", study_rows(data)))
+    blocks.append(Table("Parameter points", study_rows(data), note=points_note(data)))
     losses = loss_rows(data)
     if losses:
         blocks.append(Table("Losses by cause and phase, all runs", losses))

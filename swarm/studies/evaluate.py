@@ -108,6 +108,9 @@ def evaluate_plan(
         "confidence": confidence,
         "detection": stats.distribution(np.asarray(detection, dtype=np.float64)) if detection else None,
         "detection_values": detection,
+        # the t intervals of the means, for `stats.agreement` with the plan's expectations
+        "detection_interval": point["detection_interval"],
+        "lost_interval": point["lost_interval"],
         "lost": stats.distribution(np.asarray([len(x) for x in cols["losses"]], dtype=np.float64)),
         "lost_values": [len(x) for x in cols["losses"]],
         # robots the clearance expended (one a mine cleared) and robots back at sea

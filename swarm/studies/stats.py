@@ -17,6 +17,10 @@ records a boolean `success` per run. The questions users ask are binomial ones:
 `k_out_of_n` is the closed form of the simplest attrition mission (k of n robots must survive, each
 independently), which the test suite uses to check the study machinery against a known truth.
 `distribution` summarises a per-run quantity (e.g. completion time, NaN when never completed).
+
+Does the simulation deliver what the plan promised? `mean_interval` is the Student t interval of a
+per-run mean (mines found, robots lost); `agreement` says whether the plan's number lies inside it,
+or where it lies outside it, promising more than the runs give (optimistic) or less (conservative).
 """
 
 from __future__ import annotations
@@ -28,14 +32,17 @@ from numbers import Real
 
 import numpy as np
 from scipy.stats import binom, norm
+from scipy.stats import t as student_t
 
 from swarm.errors import SwarmError
 
 __all__ = [
     "RequiredAnswer",
     "StatsInputError",
+    "agreement",
     "distribution",
     "k_out_of_n",
+    "mean_interval",
     "required_value",
     "runs_for_lower_bound",
     "runs_for_width",
@@ -314,6 +321,35 @@ def k_out_of_n(n: int, k: int, p: float) -> float:
         raise StatsInputError(f"k must be an integer, found {k!r}")
     _check_probability("p", p)
     return float(binom.sf(k - 1, n, p))
+
+
+def mean_interval(values: Sequence[float], confidence: float = 0.95) -> tuple[float, float] | None:
+    """The Student t interval of the mean of i.i.d. runs' values (None below two runs): the runs
+    of a study are independent draws of the same mission, and their mean is what a plan predicts."""
+    _z(confidence)  # checks the confidence
+    x = np.asarray(values, dtype=float).ravel()
+    if x.size < 2:
+        return None
+    mean, sem = float(np.mean(x)), float(np.std(x, ddof=1)) / math.sqrt(x.size)
+    if sem == 0.0:
+        return mean, mean
+    low, high = student_t.interval(confidence, x.size - 1, loc=mean, scale=sem)
+    return float(low), float(high)
+
+
+def agreement(
+    planned: float | None, interval: tuple[float, float] | None, *, more_is_better: bool
+) -> str | None:
+    """Where a plan's expected value lies against the runs' `mean_interval`: "agrees" inside it;
+    outside, "optimistic" when it promises better than the runs give (more mines found, fewer robots
+    lost: `more_is_better` says which way is better), else "conservative". None without either."""
+    if planned is None or interval is None:
+        return None
+    low, high = interval
+    if low <= planned <= high:
+        return "agrees"
+    above = planned > high
+    return "optimistic" if above == more_is_better else "conservative"
 
 
 def distribution(values: np.ndarray) -> dict[str, int | float | None]:

@@ -201,8 +201,9 @@ def _batch_sizes(spec: StudySpec, tasks: list[RunTask], batch: int | None, worke
 
 def summarize(spec: StudySpec, table: pa.Table) -> dict:
     """Per point: success rate with its Wilson interval, completion times, losses by cause and
-    phase beside the plan's, the mines found beside the plan's, mean mines cleared and robots back
-    at sea, runs for narrower intervals; the required value of the first swept key; totals."""
+    phase beside the plan's, the mines found beside the plan's (each mean with its t interval),
+    mean mines cleared and robots back at sea, runs for narrower intervals; the required value of
+    the first swept key; totals."""
     cols = table.to_pydict()
     point_of = np.asarray(cols["point"], dtype=np.int64)
     success = np.asarray(cols["success"], dtype=bool)
@@ -232,9 +233,11 @@ def summarize(spec: StudySpec, table: pa.Table) -> dict:
                 "losses_by_cause": by_cause,
                 "losses_by_phase": by_phase,
                 "lost_mean": float(np.mean([len(losses[i]) for i in mine])) if n else 0.0,
+                "lost_interval": _interval_of([len(losses[i]) for i in mine], spec.confidence),
                 "planned_lost": next((planned[i] for i in mine if planned[i] is not None), None),
                 # the mines found a run against the plan's expectation after its losses
                 "detection_mean": _mean_of([found[i] for i in mine]),
+                "detection_interval": _interval_of([found[i] for i in mine], spec.confidence),
                 "planned_detection": next(
                     (planned_found[i] for i in mine if planned_found[i] is not None), None
                 ),
@@ -271,6 +274,12 @@ def _mean_of(values: list) -> float | None:
     """The mean of the values that are there; None when none is."""
     there = [v for v in values if v is not None]
     return float(np.mean(there)) if there else None
+
+
+def _interval_of(values: list, confidence: float) -> list[float] | None:
+    """The t interval of the mean of the values that are there (`stats.mean_interval`), as JSON."""
+    interval = stats.mean_interval([v for v in values if v is not None], confidence)
+    return None if interval is None else list(interval)
 
 
 def _runs_for(rate: float, half_width: float, confidence: float, n: int) -> int | None:

@@ -110,3 +110,30 @@ def test_the_plan_checks_the_fewest_robots_it_expects_back_against_min_robots_re
     # no criterion on it, or a plan from before the plan said it: nothing to check
     for d in (_plan_json([4.6, 6.6], 0), _plan_json(None, 5)):
         assert all("back at sea" not in c["criterion"] for c in plan_data(d)["verdict"].get("checks", []))
+
+
+def test_the_table_says_whether_the_plan_agrees_with_its_runs() -> None:
+    """The runs' interval of each mean beside the plan's expectation and its verdict: 4.2 expected
+    lost lies inside 3.1 to 5.9 (agrees); 99% expected found lies above 92% to 96% (optimistic)."""
+    expected = {"hazards": True, "total": 4.2, "by_phase": {"beach": {"failure": 4.2}}}
+    ev = {
+        **_evaluation(),
+        "lost_interval": [3.1, 5.9],
+        "detection": {"mean": 0.94, "median": 0.95, "min": 0.9, "max": 1.0},
+        "detection_interval": [0.92, 0.96],
+    }
+    rows = dict(map(tuple, evaluation_table(ev, expected, 0.99)))
+    assert rows["lost per run: simulated against planned"] == (
+        "4.5 (95% interval 3.1 to 5.9; plan 4.2: agrees)"
+    )
+    assert rows["detection per run: simulated against planned"] == (
+        "94.0% (95% interval 92.0% to 96.0%; plan 99.0%: optimistic)"
+    )
+    # an evaluation from before the intervals were kept: the plan's value alone
+    older = {k: v for k, v in ev.items() if not k.endswith("_interval")}
+    rows = dict(map(tuple, evaluation_table(older, expected, 0.90)))
+    assert rows["detection per run: simulated against planned"] == "94.0% (plan 90.0%)"
+    # no plan's detection (no search): no such row
+    assert "detection per run: simulated against planned" not in dict(
+        map(tuple, evaluation_table(ev, expected))
+    )

@@ -450,9 +450,51 @@ def test_the_points_set_the_mines_found_beside_the_plan_s_expectation() -> None:
     assert [p["detection_mean"] for p in points] == [pytest.approx(0.85), pytest.approx(0.95)]
     assert [p["planned_detection"] for p in points] == [0.829, 0.948]
     rows = study_rows({"points": points})
-    assert column(rows, "mean detection") == ["85.0%", "95.0%"]
-    assert column(rows, "plan's detection") == ["82.9%", "94.8%"]
+    # two runs: t(0.975, 1) = 12.706 times 0.05 is a wide interval; one run: none
+    assert column(rows, "mean detection") == ["85.0% ± 63.5", "95.0%"]
+    assert column(rows, "plan's detection") == ["82.9% (agrees)", "94.8%"]
     older = summarize(spec, pa.table(base))["points"]
     assert [p["planned_detection"] for p in older] == [None, None]
     no_search = [{**p, "detection_mean": None, "planned_detection": None} for p in points]
     assert "mean detection" not in study_rows({"points": no_search})[0]
+
+
+def test_the_points_say_whether_the_plan_agrees_with_its_runs() -> None:
+    """Each point's mean losses and detection carry the half-width of their 95% Student t interval,
+    and the plan's expectation says whether it lies inside (agrees), promises better than the runs
+    give (optimistic) or worse (conservative). Four runs: t(0.975, 3) = 3.1824 (a t table)."""
+    from swarm.studies.study import StudySpec, summarize
+    from swarm.studies.sweep import parse_sweeps
+
+    spec = StudySpec(
+        str(ROOT / "missions" / "mine_clear.yaml"), 4, parse_sweeps(["swarm.count=12,24"]), seed=1
+    )
+    loss = {"cause": "failure", "phase": "beach"}
+    lost = [2, 3, 4, 3, 5, 5, 5, 5]
+    table = pa.table(
+        {
+            "point": pa.array([0] * 4 + [1] * 4, pa.int32()),
+            "run": pa.array([0, 1, 2, 3] * 2, pa.int32()),
+            "success": [True] * 8,
+            "losses": [[loss] * k for k in lost],
+            "completed_s": [1.0] * 8,
+            "value_detection": [0.80, 0.90, 0.85, 0.85, 0.90, 1.00, 0.95, 0.95],
+            "planned_lost": [1.5] * 4 + [5.0] * 4,
+            "planned_detection": [0.95] * 4 + [0.70] * 4,
+        }
+    )
+    points = summarize(spec, table)["points"]
+    # losses 2, 3, 4, 3: mean 3, s.d. sqrt(2/3), half-width 3.1824 * 0.8165 / 2 = 1.299
+    assert points[0]["lost_interval"] == pytest.approx([3 - 1.2992, 3 + 1.2992], abs=1e-4)
+    assert points[1]["lost_interval"] == [5.0, 5.0]  # every run alike: no spread
+    # detection 0.80, 0.90, 0.85, 0.85: s.d. 0.040825, half-width 3.1824 * 0.020412 = 0.06496
+    assert points[0]["detection_interval"] == pytest.approx([0.85 - 0.06496, 0.85 + 0.06496], abs=1e-5)
+    rows = study_rows({"points": points})
+    assert column(rows, "mean lost per run") == ["3.00 ± 1.30", "5.00 ± 0.00"]
+    # the plan expects 1.5 lost where the runs lose 1.7 to 4.3: it promises too few
+    assert column(rows, "plan's expected losses") == ["1.50 (optimistic)", "5.00 (agrees)"]
+    assert column(rows, "mean detection") == ["85.0% ± 6.5", "95.0% ± 6.5"]
+    assert column(rows, "plan's detection") == ["95.0% (optimistic)", "70.0% (conservative)"]
+    # a summary from before the intervals: the bare numbers
+    bare = [{k: v for k, v in p.items() if not k.endswith("_interval")} for p in points]
+    assert column(study_rows({"points": bare}), "plan's expected losses") == ["1.50", "5.00"]

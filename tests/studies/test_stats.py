@@ -13,8 +13,10 @@ from scipy.stats import binom, binomtest, norm
 from swarm.errors import SwarmError
 from swarm.studies.stats import (
     StatsInputError,
+    agreement,
     distribution,
     k_out_of_n,
+    mean_interval,
     required_value,
     runs_for_lower_bound,
     runs_for_width,
@@ -309,3 +311,43 @@ def test_distribution_all_nan_and_empty() -> None:
         assert d["completed"] == 0 and d["count"] == sample.size
         assert all(d[key] is None for key in ("mean", "median", "p10", "p90", "min", "max"))
         json.dumps(d)
+
+
+# --- a plan's expectation against its runs -------------------------------------------------------
+
+
+def test_the_mean_interval_is_student_s_t_interval() -> None:
+    """1..5: mean 3, s.d. sqrt(2.5), t(0.975, 4) = 2.7764 (a t table): 3 ± 2.7764 sqrt(2.5 / 5)."""
+    low, high = mean_interval([1, 2, 3, 4, 5])
+    assert (low, high) == pytest.approx((3 - 1.96324, 3 + 1.96324), abs=1e-5)
+    # wider at higher confidence; t(0.995, 4) = 4.6041
+    assert mean_interval([1, 2, 3, 4, 5], 0.99) == pytest.approx((3 - 3.25557, 3 + 3.25557), abs=1e-4)
+    assert mean_interval([7.0]) is None and mean_interval([]) is None  # no spread to measure
+    assert mean_interval([4.0, 4.0, 4.0]) == (4.0, 4.0)
+    with pytest.raises(StatsInputError, match="confidence"):
+        mean_interval([1, 2], 1.0)
+
+
+def test_the_mean_interval_covers_the_true_mean_at_its_confidence() -> None:
+    """Normal runs, 8 at a time: the t interval is exact, so 95% of them cover the mean (the normal
+    quantile's narrower interval would cover about 91%)."""
+    rng = np.random.default_rng(7)
+    trials = 4000
+    covered = sum(
+        lo <= 0.9 <= hi for lo, hi in (mean_interval(rng.normal(0.9, 0.05, 8)) for _ in range(trials))
+    )
+    se = math.sqrt(0.95 * 0.05 / trials)
+    assert abs(covered / trials - 0.95) < 4 * se
+
+
+def test_agreement_says_which_way_a_plan_misses() -> None:
+    assert agreement(0.95, (0.94, 0.96), more_is_better=True) == "agrees"
+    assert agreement(0.94, (0.94, 0.96), more_is_better=True) == "agrees"  # the ends are inside
+    # more found than the runs find: optimistic; fewer: conservative
+    assert agreement(0.97, (0.94, 0.96), more_is_better=True) == "optimistic"
+    assert agreement(0.90, (0.94, 0.96), more_is_better=True) == "conservative"
+    # fewer lost than the runs lose: optimistic; more: conservative
+    assert agreement(8.0, (9.0, 10.0), more_is_better=False) == "optimistic"
+    assert agreement(11.0, (9.0, 10.0), more_is_better=False) == "conservative"
+    assert agreement(None, (9.0, 10.0), more_is_better=False) is None
+    assert agreement(9.5, None, more_is_better=False) is None

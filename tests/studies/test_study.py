@@ -15,10 +15,12 @@ import time
 from collections.abc import Iterator
 from pathlib import Path
 
+import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
 import yaml
+from scipy.stats import t
 
 from swarm.cli import main
 from swarm.errors import InputError
@@ -464,10 +466,20 @@ def test_plan_evaluate_prints_the_detection_beside_the_plan_s(tmp_path, capsys) 
     out = tmp_path / "plan"
     assert main(["plan", str(mission), "--evaluate", "3", "--workers", "1", "--out", str(out)]) == 0
     printed = capsys.readouterr().out
-    found = json.loads((out / "evaluation.json").read_text())["detection"]["mean"]
+    ev = json.loads((out / "evaluation.json").read_text())
+    found = ev["detection"]["mean"]
     (planned,) = json.loads((out / "plan.json").read_text())["budget"]["search"].values()
+    planned = planned["expected_detection_after_losses"]
+    # the runs' Student t interval of the mean, and where the plan's expectation lies against it
+    values = np.asarray(ev["detection_values"])
+    sem = values.std(ddof=1) / np.sqrt(len(values))
+    low, high = t.interval(0.95, len(values) - 1, loc=values.mean(), scale=sem) if sem else (found, found)
+    said = "agrees" if low <= planned <= high else ("optimistic" if planned > high else "conservative")
     line = next(x for x in printed.splitlines() if "in simulation" in x)
-    assert f"detection {found:.1%} a run (plan {planned['expected_detection_after_losses']:.1%})" in line
+    assert (
+        f"detection {found:.1%} a run (95% interval {low:.1%} to {high:.1%}; plan {planned:.1%}: {said})"
+        in line
+    )
 
 
 def test_planning_again_into_a_folder_replaces_its_evaluation(tmp_path, capsys) -> None:
