@@ -139,6 +139,31 @@ def _x_positions(summary: dict, key: str | None) -> tuple[dict, list[str] | None
     return {v: float(i) for i, v in enumerate(values)}, [format_value(v) for v in values]
 
 
+def _series(summary: dict, key: str | None) -> tuple[dict, list[str] | None, list[str], dict, float]:
+    """The x positions and tick labels of `key`'s values, the other swept keys, the points grouped
+    by those keys' values (one line each) and the smallest gap between x positions (for dodging)."""
+    positions, ticks = _x_positions(summary, key)
+    others = [k for k in swept_keys(summary) if k != key]
+    series: dict[tuple, list[dict]] = {}
+    for p in summary.get("points") or []:
+        params = p.get("params", {})
+        series.setdefault(tuple(params.get(k) for k in others), []).append(p)
+    xs = sorted(set(positions.values()))
+    gap = float(min(np.diff(xs))) if len(xs) > 1 else 1.0
+    return positions, ticks, others, series, gap
+
+
+def _x_axis(ax, key: str | None, positions: dict, ticks: list[str] | None) -> None:
+    """The swept key's label and ticks: category names, or whole numbers for a count."""
+    ax.set_xlabel(key_label(key) if key is not None else "")
+    if ticks is not None:
+        ax.set_xticks(sorted(positions.values()), ticks)
+        if len(ticks) == 1:
+            ax.set_xlim(-1.0, 1.0)
+    elif key is not None and all(isinstance(v, int) for v in positions):
+        ax.xaxis.set_major_locator(MaxNLocator(integer=True))
+
+
 def success_png(summary: dict) -> bytes | None:
     """Success probability against the swept key with Wilson interval error bars, one line per value
     of the other swept keys, the target as a horizontal line and the required value marked; None
@@ -147,16 +172,8 @@ def success_png(summary: dict) -> bytes | None:
     if not points:
         return None
     key = x_key(summary)
-    positions, ticks = _x_positions(summary, key)
-    others = [k for k in swept_keys(summary) if k != key]
-    series: dict[tuple, list[dict]] = {}
-    for p in points:
-        params = p.get("params", {})
-        series.setdefault(tuple(params.get(k) for k in others), []).append(p)
-
+    positions, ticks, others, series, gap = _series(summary, key)
     fig, ax = new_figure(7.5, 4.2, layout="constrained")
-    xs_all = sorted(set(positions.values()))
-    gap = min(np.diff(xs_all)) if len(xs_all) > 1 else 1.0
     for i, (combo, pts) in enumerate(series.items()):
         colour, marker, style = SERIES_STYLES[i % len(SERIES_STYLES)]
         pts = sorted(pts, key=lambda p: positions[p.get("params", {}).get(key)])
@@ -195,18 +212,72 @@ def success_png(summary: dict) -> bytes | None:
         )
     ax.set_ylim(-0.02, 1.05)
     ax.set_ylabel("P(success) (fraction of runs)")
-    ax.set_xlabel(key_label(key) if key is not None else "")
-    if ticks is not None:
-        ax.set_xticks(sorted(positions.values()), ticks)
-        if len(ticks) == 1:
-            ax.set_xlim(-1.0, 1.0)
-    elif key is not None and all(isinstance(v, int) for v in positions):
-        ax.xaxis.set_major_locator(MaxNLocator(integer=True))
+    _x_axis(ax, key, positions, ticks)
     confidence = summary.get("confidence", 0.95)
     runs = summary.get("runs_per_point")
     per = f", {runs} runs per point" if runs else ""
     ax.set_title(f"success probability with {confidence:.0%} Wilson intervals{per}", fontsize=9)
     ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
+    return png_bytes(fig)
+
+
+#: The plan-against-runs panels: (the point's mean, its interval, the plan's value, axis label, as %).
+AGREEMENT_PANELS = (
+    ("detection_mean", "detection_interval", "planned_detection", "mines found per run", True),
+    ("lost_mean", "lost_interval", "planned_lost", "robots lost per run", False),
+)
+
+
+def agreement_png(summary: dict) -> bytes | None:
+    """What the plan expects against what its runs gave, point by point: each panel the runs' mean
+    with its t interval (`stats.mean_interval`) and the plan's expectation as a hollow marker, for
+    the mines found (where the mission has a search) and the robots lost (where it has hazards);
+    None when no point has a plan's expectation."""
+    points = summary.get("points") or []
+    panels = [
+        panel
+        for panel in AGREEMENT_PANELS
+        if any(p.get(panel[2]) is not None and p.get(panel[0]) is not None for p in points)
+    ]
+    if not panels:
+        return None
+    key = x_key(summary)
+    positions, ticks, others, series, gap = _series(summary, key)
+    fig, axes = new_figure(
+        4.2 * len(panels) + 1.6, 3.8, ncols=len(panels), layout="constrained", squeeze=False
+    )
+    for ax, (mean_key, interval_key, plan_key, label, as_percent) in zip(axes[0], panels, strict=True):
+        scale = 100.0 if as_percent else 1.0
+        for i, (combo, pts) in enumerate(series.items()):
+            colour, marker, _ = SERIES_STYLES[i % len(SERIES_STYLES)]
+            pts = sorted(
+                (p for p in pts if p.get(mean_key) is not None),
+                key=lambda p: positions[p.get("params", {}).get(key)],
+            )
+            if not pts:
+                continue
+            dodge = 0.06 * gap * (i - (len(series) - 1) / 2)
+            x = np.array([positions[p.get("params", {}).get(key)] for p in pts]) + dodge
+            mean = np.array([p[mean_key] for p in pts], dtype=float) * scale
+            bounds = [p.get(interval_key) or [p[mean_key], p[mean_key]] for p in pts]
+            lo = np.clip(mean - np.array([b[0] for b in bounds], dtype=float) * scale, 0.0, None)
+            hi = np.clip(np.array([b[1] for b in bounds], dtype=float) * scale - mean, 0.0, None)
+            name = ", ".join(f"{k} = {format_value(v)}" for k, v in zip(others, combo, strict=True))
+            ax.errorbar(x, mean, yerr=[lo, hi], color=colour, marker=marker, ls="none", ms=5, capsize=3,
+                        lw=1.4, label=f"runs{': ' + name if name else ''}", zorder=5)  # fmt: skip
+            planned = [
+                (xi, p[plan_key] * scale) for xi, p in zip(x, pts, strict=True) if p.get(plan_key) is not None
+            ]
+            if planned:
+                px, py = zip(*planned, strict=True)
+                ax.plot(px, py, ls="none", marker=marker, ms=9, mfc="none", mec=OKABE_ITO["black"], mew=1.3,
+                        label=f"plan{': ' + name if name else ''}", zorder=6)  # fmt: skip
+        ax.set_ylabel(label + (" (%)" if as_percent else ""))
+        _x_axis(ax, key, positions, ticks)
+        ax.legend(fontsize=7, frameon=False)
+    confidence = summary.get("confidence", 0.95)
+    fig.suptitle(f"the plan's expectation (hollow) against the runs' means with {confidence:.0%} t intervals",
+                 fontsize=9)  # fmt: skip
     return png_bytes(fig)
 
 

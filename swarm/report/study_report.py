@@ -311,6 +311,14 @@ def _figures(
             absent="No parameter points.",
         ),
         Figure(
+            "The plan against its runs",
+            lambda: figs.agreement_png(summary),
+            alt="The plan's expected mines found and robots lost per run against the runs' means with "
+            "their t intervals, point by point",
+            absent="No plan's expectation to compare: the results table has no planned_lost or "
+            "planned_detection column, or the mission has no hazards and no search.",
+        ),
+        Figure(
             "Robots lost per run, by cause and phase",
             lambda: figs.losses_png(summary),
             alt="Stacked bars of robots lost per run by cause, by phase and by parameter point",

@@ -498,3 +498,34 @@ def test_the_points_say_whether_the_plan_agrees_with_its_runs() -> None:
     # a summary from before the intervals: the bare numbers
     bare = [{k: v for k, v in p.items() if not k.endswith("_interval")} for p in points]
     assert column(study_rows({"points": bare}), "plan's expected losses") == ["1.50", "5.00"]
+
+
+def test_the_plan_against_its_runs_is_drawn_only_where_the_plan_says_something() -> None:
+    """One panel per quantity the plan expects (mines found with a search, robots lost with
+    hazards), none without either; the same summary gives the same bytes."""
+    base = {"runs": 8, "successes": 8, "success_rate": 1.0, "wilson_low": 0.7, "wilson_high": 1.0}
+    points = [
+        {
+            **base,
+            "index": i,
+            "params": {KEY: count},
+            "lost_mean": 0.2 * count,
+            "lost_interval": [0.2 * count - 1.0, 0.2 * count + 1.0],
+            "planned_lost": 0.2 * count + 0.5,
+            "detection_mean": 0.9,
+            "detection_interval": [0.88, 0.92],
+            "planned_detection": 0.93,
+        }
+        for i, count in enumerate(COUNTS)
+    ]
+    summary = {"confidence": 0.95, "sweeps": {KEY: list(COUNTS)}, "points": points}
+    both = figs.agreement_png(summary)
+    assert both is not None and figs.agreement_png(summary) == both
+    no_search = [{**p, "detection_mean": None, "planned_detection": None} for p in points]
+    losses_only = figs.agreement_png({**summary, "points": no_search})
+    assert losses_only is not None
+    # two panels are wider than one
+    assert Image.open(io.BytesIO(both)).width > 1.5 * Image.open(io.BytesIO(losses_only)).width
+    # a table from before the plan's columns, or a mission with nothing to expect: no figure
+    bare = [{k: v for k, v in p.items() if not k.startswith("planned")} for p in points]
+    assert figs.agreement_png({**summary, "points": bare}) is None
