@@ -323,9 +323,14 @@ def k_out_of_n(n: int, k: int, p: float) -> float:
     return float(binom.sf(k - 1, n, p))
 
 
-def mean_interval(values: Sequence[float], confidence: float = 0.95) -> tuple[float, float] | None:
+def mean_interval(
+    values: Sequence[float],
+    confidence: float = 0.95,
+    within: tuple[float, float] = (-math.inf, math.inf),
+) -> tuple[float, float] | None:
     """The Student t interval of the mean of i.i.d. runs' values (None below two runs): the runs
-    of a study are independent draws of the same mission, and their mean is what a plan predicts."""
+    of a study are independent draws of the same mission, and their mean is what a plan predicts.
+    Cut to `within`, the range the mean cannot leave (a share of the mines found: 0 to 1)."""
     _z(confidence)  # checks the confidence
     x = np.asarray(values, dtype=float).ravel()
     if x.size < 2:
@@ -334,7 +339,7 @@ def mean_interval(values: Sequence[float], confidence: float = 0.95) -> tuple[fl
     if sem == 0.0:
         return mean, mean
     low, high = student_t.interval(confidence, x.size - 1, loc=mean, scale=sem)
-    return float(low), float(high)
+    return max(float(low), within[0]), min(float(high), within[1])
 
 
 def agreement(

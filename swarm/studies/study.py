@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import datetime
 import json
+import math
 from collections import Counter
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
@@ -233,11 +234,13 @@ def summarize(spec: StudySpec, table: pa.Table) -> dict:
                 "losses_by_cause": by_cause,
                 "losses_by_phase": by_phase,
                 "lost_mean": float(np.mean([len(losses[i]) for i in mine])) if n else 0.0,
-                "lost_interval": _interval_of([len(losses[i]) for i in mine], spec.confidence),
+                "lost_interval": _interval_of(
+                    [len(losses[i]) for i in mine], spec.confidence, (0.0, math.inf)
+                ),
                 "planned_lost": next((planned[i] for i in mine if planned[i] is not None), None),
                 # the mines found a run against the plan's expectation after its losses
                 "detection_mean": _mean_of([found[i] for i in mine]),
-                "detection_interval": _interval_of([found[i] for i in mine], spec.confidence),
+                "detection_interval": _interval_of([found[i] for i in mine], spec.confidence, (0.0, 1.0)),
                 "planned_detection": next(
                     (planned_found[i] for i in mine if planned_found[i] is not None), None
                 ),
@@ -276,9 +279,10 @@ def _mean_of(values: list) -> float | None:
     return float(np.mean(there)) if there else None
 
 
-def _interval_of(values: list, confidence: float) -> list[float] | None:
-    """The t interval of the mean of the values that are there (`stats.mean_interval`), as JSON."""
-    interval = stats.mean_interval([v for v in values if v is not None], confidence)
+def _interval_of(values: list, confidence: float, within: tuple[float, float]) -> list[float] | None:
+    """The t interval of the mean of the values that are there (`stats.mean_interval`, cut to
+    `within`), as JSON."""
+    interval = stats.mean_interval([v for v in values if v is not None], confidence, within)
     return None if interval is None else list(interval)
 
 
