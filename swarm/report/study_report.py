@@ -143,12 +143,13 @@ def _bounds(interval: object) -> tuple[float, float] | None:
 
 
 def _mean_cell(mean: object, interval: object, spec: str) -> str:
-    """'9.70 ± 0.56': a per-run mean and the half-width of its t interval (`stats.mean_interval`),
-    the bare mean without one."""
-    text, bounds = _fmt(mean, spec), _bounds(interval)
-    if text == MISSING or bounds is None:
+    """'9.70 ± 0.56': a per-run mean and the half-width of its t interval (`stats.mean_interval`;
+    the wider side where the interval stops at a bound, as a share's at 100%), the bare mean
+    without one."""
+    text, bounds, m = _fmt(mean, spec), _bounds(interval), _number(mean)
+    if text == MISSING or bounds is None or m is None:
         return text
-    return f"{text} ± {format((bounds[1] - bounds[0]) / 2, spec).rstrip('%')}"
+    return f"{text} ± {format(max(m - bounds[0], bounds[1] - m), spec).rstrip('%')}"
 
 
 def _plan_cell(planned: object, interval: object, spec: str, *, more_is_better: bool = True) -> str:
