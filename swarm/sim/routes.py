@@ -20,6 +20,8 @@ from swarm.sim.physics_kernels import maximum, minimum
 #: robot stops, within `FINAL_CAPTURE_M` (inside the controller's stopping distance).
 CAPTURE_M = 1.0
 FINAL_CAPTURE_M = 0.3
+#: A side-step's first point lies at least this far from where it leaves the leg (`clear_of`).
+SIDESTEP_CLEAR_M = 1.25 * CAPTURE_M
 #: Pure pursuit: the robot steers for the point this far ahead of its projection on the leg it is
 #: driving (m). Steering for the far end of a 900 m search track instead lets a cross-slope push
 #: carry the robot metres off the track it was planned to sweep; chasing a point on the leg pulls
@@ -264,6 +266,12 @@ def clear_of(points: np.ndarray, avoid: np.ndarray, radius_m: float) -> tuple[np
         s0 = np.clip(along[k, js] - radius_m, 0.0, length[k])
         s1 = np.clip(along[k, js] + radius_m, 0.0, length[k])
         normal = np.array([-u[k, 1], u[k, 0]])
+        # a side-step that begins within the capture radius of the leg's start (a mine found just
+        # ahead) is pushed out beyond it: captured at once, its first point was skipped and the
+        # robot cut the corner from its heading straight at the mine onto it
+        short = np.hypot(s0, side) < SIDESTEP_CLEAR_M
+        out_m = np.sqrt(np.maximum(SIDESTEP_CLEAR_M**2 - s0**2, side**2))
+        side = np.where(short, np.sign(side) * out_m, side)
         steps = np.empty((len(js), 2, 2))
         steps[:, 0] = a[k] + s0[:, None] * u[k] + side[:, None] * normal
         steps[:, 1] = a[k] + s1[:, None] * u[k] + side[:, None] * normal
