@@ -85,6 +85,9 @@ RETURN_PHASE = "return"
 #: The scripted policy hands a lost searcher's track out in pieces of this length (m), a trip to
 #: each (`swarm.sim.policy.TAKEOVER_PIECE_M`).
 TAKEOVER_PIECE_M = 300.0
+#: An undone lane's neighbours out to this many lanes a side decide what its strip keeps
+#: (`undone_band_kept`; an inverse-cube sensor's farther lanes count as driven).
+BAND_REACH_LANES = 3
 #: The simulator's trigger radius (`swarm.sim.mines.DEFAULT_TRIGGER_RADIUS_M`, m).
 TRIGGER_RADIUS_M = 0.25
 #: The simulator's hidden-rock contact radius (`swarm.sim.hazards.ROCK_CONTACT_M`, m).
@@ -438,16 +441,22 @@ def search_speed_mps(mission: Mission, cm: CostMap, polygon: BaseGeometry) -> fl
 
 
 def search_window_s(mission: Mission, task, start_s: float) -> tuple[float, float]:
-    """When the search must be done: the clearance less the standoff retreat and the marking time,
-    else the end of beach operations; less `WINDOW_SLACK` of the window."""
-    v = mission.robot.wheel_speed_mps
-    if task.clearance is not None:
-        retreat = RETREAT_FACTOR * (task.clearance.standoff_m + STANDOFF_MARGIN_M) / v + RETREAT_ALLOWANCE_S
-        end = task.clearance.at_s - retreat
-    else:
-        end = mission.beach_end_s
+    """When the search must be done: `takeover_end_s` less `WINDOW_SLACK` of the window."""
+    end = takeover_end_s(mission, task)
     end -= WINDOW_SLACK * max(end - start_s, 0.0)
     return start_s, end
+
+
+def takeover_end_s(mission: Mission, task) -> float:
+    """Until when the survivors can drive lost searchers' tracks: the clearance less the standoff
+    retreat, else the end of beach operations. The search window ends `WINDOW_SLACK` earlier; the
+    scripted policy's takeovers run on into that slack (the robots on a piece of track are not
+    idle, so no mark calls them off it), the slack being kept for them."""
+    if task.clearance is None:
+        return mission.beach_end_s
+    v = mission.robot.wheel_speed_mps
+    retreat = RETREAT_FACTOR * (task.clearance.standoff_m + STANDOFF_MARGIN_M) / v + RETREAT_ALLOWANCE_S
+    return task.clearance.at_s - retreat
 
 
 def detection_needed(
@@ -591,22 +600,132 @@ def undone_lane_kept(
     lane's reach. (`nominal_detection(2S) / nominal(S)` is the average over the swept
     and the unswept strips of every other lane undone: it keeps half of a cookie cutter's strip at
     W = S, where an undone lane keeps none.)"""
+    return _KeptBeside(model, width_m, spacing_m, curve, 0, samples)(frozenset())
+
+
+def _lanes_reached(model: str, width_m: float, spacing_m: float, curve: LateralRange | None) -> int:
+    """How many lanes to each side a track's sensor reaches into (inverse cube: 60, beyond which
+    the rate adds at most W^2 / (120 pi S^2))."""
     if model == "inverse_cube" and curve is None:
-        lanes = 60  # the rate falls as 1/x^2: the lanes beyond add at most W^2 / (120 pi S^2) to it
+        return 60
+    reach = float(curve.range_m[-1]) if curve is not None else width_m / 2.0
+    return math.ceil(reach / spacing_m) + 1
+
+
+class _KeptBeside:
+    """`undone_lane_kept` of lane 0 when the lanes at some offsets (up to `near` a side) are undone
+    too: what its strip finds without them all, less what the driven strips lose by lane 0's
+    absence alone (the loss in the other undone strips is theirs), over what its strip finds in
+    the full lattice. The lattice's misses are worked out once; each set of lanes undone then
+    takes out only its own columns."""
+
+    def __init__(
+        self,
+        model: str,
+        width_m: float,
+        spacing_m: float,
+        curve: LateralRange | None,
+        near: int,
+        samples: int,
+    ) -> None:
+        far = _lanes_reached(model, width_m, spacing_m, curve) + near
+        self.k = np.arange(-far - 1, far + 2)
+        y = (np.arange((2 * far + 1) * samples) + 0.5) / samples * spacing_m - (far + 0.5) * spacing_m
+        d = np.abs(y[:, None] - self.k[None, :] * spacing_m)
+        if model == "inverse_cube" and curve is None:  # as `_lattice_detection`: the rates add
+            self.rates = width_m**2 / (4.0 * math.pi) / np.maximum(d, 1e-6) ** 2
+        else:
+            self.rates = None
+            p = lateral_range_p(curve, d) if curve is not None else (d <= width_m / 2.0).astype(np.float64)
+            self.misses = 1.0 - p
+        self.lane = np.rint(y / spacing_m).astype(int)
+        self.samples = samples
+        self.model, self.width_m, self.spacing_m = model, width_m, spacing_m
+        self.full = self._detection(np.ones(len(self.k), bool))
+        self.own = self.lane == 0
+        self.nominal = float(self.full[self.own].mean())
+
+    def _detection(self, tracks: np.ndarray) -> np.ndarray:
+        if self.rates is not None:
+            return -np.expm1(-self.rates[:, tracks].sum(axis=1))
+        return 1.0 - np.prod(self.misses[:, tracks], axis=1)
+
+    def __call__(self, others: frozenset) -> float:
+        if self.nominal <= 0.0:
+            return 1.0
+        gone = np.isin(self.k, list(others))
+        with_others = self._detection(~gone)
+        without = self._detection(~gone & (self.k != 0))
+        driven = ~self.own & ~np.isin(self.lane, list(others))
+        lost = float((self.full - without)[self.own].sum() + (with_others - without)[driven].sum())
+        return float(min(max(1.0 - lost / self.samples / self.nominal, 0.0), 1.0))
+
+
+def undone_band_kept(
+    model: str,
+    width_m: float,
+    spacing_m: float,
+    curve: LateralRange | None = None,
+    *,
+    lanes: float,
+    left: float,
+    undone: float,
+    lost: float = 0.0,
+    samples: int = 16,
+) -> float:
+    """Of what the strips of the lost searchers' undone track are expected to find, the share kept.
+    A searcher drives a boustrophedon across its own band of `lanes` adjacent lanes, so a lost one
+    leaves the rest of its band; the survivors take over all but `undone` of that rest in pieces,
+    each piece on its own (`swarm.sim.policy` auctions them to whoever is nearest). `left`: the
+    mean share of its track a lost searcher leaves: all of it when lost before the track, a
+    uniform share when lost on it, mixed to give that mean. The bands beside are the neighbours'
+    searchers', each lost with probability `lost`, a lane of theirs then undone with probability
+    `left` x `undone`. A lane whose neighbours are driven keeps `undone_lane_kept`, the limit of
+    one-lane bands or little left undone; with undone neighbours less (an interior lane of a wide
+    undone band, nothing but what the lanes beyond reach). The neighbours out to
+    `BAND_REACH_LANES` to a side count."""
+    m = max(1, round(lanes))
+    reach = min(_lanes_reached(model, width_m, spacing_m, curve) - 1, BAND_REACH_LANES)
+    offsets = [o for o in range(-reach, reach + 1) if o != 0]
+    q = 32
+    share = (np.arange(q) + 0.5) / q
+    if left >= 0.5:  # lost before its track with weight a, on it (a uniform share) otherwise
+        a = min(2.0 * left - 1.0, 1.0)
+        rest, weight = np.append(share, 1.0), np.append(np.full(q, (1.0 - a) / q), a)
     else:
-        reach = float(curve.range_m[-1]) if curve is not None else width_m / 2.0
-        lanes = math.ceil(reach / spacing_m) + 1
-    k = np.arange(-lanes - 1, lanes + 2)
-    y = (np.arange((2 * lanes + 1) * samples) + 0.5) / samples * spacing_m - (lanes + 0.5) * spacing_m
-    d = np.abs(y[:, None] - k[None, :] * spacing_m)
-    full = _lattice_detection(model, width_m, d, curve)
-    without = _lattice_detection(model, width_m, d[:, k != 0], curve)
-    strip = np.abs(y) < spacing_m / 2.0
-    nominal = float(full[strip].mean())
-    if nominal <= 0.0:
-        return 1.0
-    lost = float((full - without).sum()) / samples  # in lanes' widths
-    return float(min(max(1.0 - lost / nominal, 0.0), 1.0))
+        rest, weight = 2.0 * max(left, 0.0) * share, np.full(q, 1.0 / q)
+    xi = (np.arange(samples) + 0.5) / samples
+    lane = np.arange(m)
+
+    def at(j: np.ndarray) -> np.ndarray:  # (lanes, samples) each lane's point abreast, in lanes driven
+        return j[:, None] + np.where(j[:, None] % 2 == 0, xi[None, :], 1.0 - xi[None, :])
+
+    first = m * (1.0 - rest)[:, None, None]  # where each rest begins
+    here = at(lane)[None] >= first  # (rests, lanes, samples) the point is in the rest
+    # each neighbour's state, a base-3 digit: 0 driven, 1 in the rest of this band, 2 another band's
+    keys = np.zeros(here.shape, np.int64)
+    for digit, o in enumerate(offsets):
+        j = lane + o
+        inside = ((j >= 0) & (j < m))[:, None]
+        state = np.where(inside, at(np.clip(j, 0, m - 1))[None] >= first, 2)
+        keys += state.astype(np.int64) * 3**digit
+    totals = np.bincount(keys.ravel(), weights=(weight[:, None, None] * here).ravel(), minlength=1)
+    if totals.sum() <= 0.0:
+        return undone_lane_kept(model, width_m, spacing_m, curve)
+    chance = (0.0, undone, min(lost * left * undone, 1.0))  # undone, by state
+    kept = 0.0
+    beside = _KeptBeside(model, width_m, spacing_m, curve, reach, 64)
+    cache: dict[frozenset, float] = {}
+    for key in np.flatnonzero(totals):
+        p_of = [chance[key // 3**digit % 3] for digit in range(len(offsets))]
+        maybe = [(o, p) for o, p in zip(offsets, p_of, strict=True) if p > 0.0]
+        for pick in range(1 << len(maybe)):
+            gone = frozenset(o for b, (o, _) in enumerate(maybe) if pick >> b & 1)
+            p = math.prod(pp if pick >> b & 1 else 1.0 - pp for b, (_, pp) in enumerate(maybe))
+            if gone not in cache:
+                cache[gone] = beside(gone)
+            kept += totals[key] * p * cache[gone]
+    return float(kept / totals.sum())
 
 
 def design_search(

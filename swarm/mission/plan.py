@@ -606,9 +606,7 @@ def _plan_search(
     table = _lateral_range(task.sensor)
     speed = budget.search_speed_mps(mission, cm, polygon)
     start = _arrival_estimate_s(mission, launches, polygon)
-    rect = shapely.minimum_rotated_rectangle(polygon)
-    corners = np.asarray(rect.exterior.coords) if rect.geom_type == "Polygon" else np.zeros((2, 2))
-    row_m = float(np.hypot(*np.diff(corners, axis=0).T).max())
+    row_m = _row_length_m(polygon)
     dense = drivable_segments(boustrophedon(polygon, budget.MIN_SPACING_FRACTION * width), cm)
     reach = detection.expected_detection(mine_area, dense, model, width, table, ground=cm)
     fractions = _class_fractions(cm, polygon)
@@ -703,6 +701,21 @@ def _plan_search(
         centre = np.array(polygon.representative_point().coords[0])
         slots.extend(_Slot("spare", label, p) for p in free.spread(polygon, design.reserves, centre))
     return out, slots
+
+
+def _row_length_m(polygon) -> float:
+    """A boustrophedon's lane length over `polygon`: the long side of its minimum rotated rectangle
+    (the lanes run along it)."""
+    rect = shapely.minimum_rotated_rectangle(polygon)
+    corners = np.asarray(rect.exterior.coords) if rect.geom_type == "Polygon" else np.zeros((2, 2))
+    return float(np.hypot(*np.diff(corners, axis=0).T).max())
+
+
+def _lanes_per_searcher(search: SearchPlan) -> float:
+    """How many lanes a searcher's band holds: its tracks' mean length over the lane length."""
+    lengths = [sum(line.length for line in run) for run in search.tracks if run]
+    row = _row_length_m(shapely.Polygon(search.area_m))
+    return float(np.mean(lengths)) / row if lengths and row > 0 else 1.0
 
 
 def _lateral_range(sensor):
@@ -883,8 +896,14 @@ def _budget(mission: Mission, plan: MissionPlan) -> dict:
     lasting: dict[str, list[float]] = {}  # each search team's robots' chances of lasting beach operations
     reserves_lasting: dict[str, list[float]] = {}  # the same of its reserves alone
     orphaned_s: dict[str, float] = {}  # search time lost searchers leave undone
+    lost_run_s: dict[str, float] = {}  # the searchers' run time, each weighted by its chance of loss
     spare_s: dict[str, float] = {}  # time the others have for it: reserves, searchers done early
     swing_s2: dict[str, float] = {}  # the variance of the difference, robot by robot
+    pool_s, pool_s2 = 0.0, 0.0  # the mission's spares' time for any search, and its variance
+    takeover_end = min(
+        (budget.takeover_end_s(mission, exposure.task_of(mission, s)) for s in plan.search),
+        default=mission.beach_end_s,
+    )
     unseen_blasts = 0.0  # mines expected to go off before any sensor found them
     # the routes as the robots drive them: stitched around blocked ground, with the simulator's seed
     router = Router(cm, seed=mission.seed)
@@ -922,18 +941,34 @@ def _budget(mission: Mission, plan: MissionPlan) -> dict:
             lasting.setdefault(task, []).append(still)
             if rp.role != "search":
                 reserves_lasting.setdefault(task, []).append(still)
-            span = max(way.window_end_s - way.arrive_s, 0.0)
+            # the takeovers run into the window's slack (`budget.takeover_end_s`)
+            end_s = budget.takeover_end_s(mission, exposure.task_of(mission, way.search))
+            span = max(end_s - way.arrive_s, 0.0)
             run_s = way.search.design["search_time_s"]
             if rp.role == "search":  # its track left undone if it is lost, its slack if it is not
                 left = exposure.track_left(mission, cm, way, losses)
                 slack = max(span - run_s, 0.0)
                 orphaned_s[task] = orphaned_s.get(task, 0.0) + left * run_s
+                lost_run_s[task] = lost_run_s.get(task, 0.0) + lost * run_s
                 spare_s[task] = spare_s.get(task, 0.0) + (1.0 - lost) * slack
                 swing = (left / lost * run_s if lost > 0 else 0.0) + slack  # lost against not
             else:  # a reserve, while it lasts
                 spare_s[task] = spare_s.get(task, 0.0) + span * (1.0 - lost / 2.0)
                 swing = span / 2.0
             swing_s2[task] = swing_s2.get(task, 0.0) + lost * (1.0 - lost) * swing**2
+        elif plan.search and rp.role in ("spare", "relay", "surveillance", "beacon"):
+            # the scripted policy sends the mission's spares to lost stations first, then to lost
+            # tracks; a lost station takes one of them from about halfway on
+            lost = budget.lost_probability(losses)
+            span = max(takeover_end - way.arrive_s, 0.0)
+            pool_s += span * (1.0 - lost / 2.0) if rp.role == "spare" else -lost * span / 2.0
+            pool_s2 += lost * (1.0 - lost) * (span / 2.0) ** 2
+    # the spares' time goes to the searches in proportion to the work their losses leave
+    orphaned_total = sum(orphaned_s.values())
+    for task, left_s in orphaned_s.items():
+        share = left_s / orphaned_total if orphaned_total > 0 else 1.0 / len(orphaned_s)
+        spare_s[task] = spare_s.get(task, 0.0) + share * pool_s
+        swing_s2[task] = swing_s2.get(task, 0.0) + share**2 * pool_s2
     criterion = mission.success.min_detection_fraction
     searches = {}
     markers = [0.0, 0.0]  # robots the clearances expend: at least, at most
@@ -966,9 +1001,21 @@ def _budget(mission: Mission, plan: MissionPlan) -> dict:
             math.sqrt(swing_s2.get(s.task, 0.0)),
         )
         share = min(undone / need, 1.0) if need > 0 else 0.0
-        # a strip whose track is left undone keeps what its neighbours' sensors reach into it
+        # a strip whose track is left undone keeps what its neighbours' sensors reach into it: the
+        # driven ones', and fewer of them where the lost searcher's band is left undone around it
         lattice = "cookie_cutter" if model == "random" else model  # the sensor sees to a definite range
-        kept = budget.undone_lane_kept(lattice, s.sweep_width_m, s.spacing_m, task.sensor.lateral_range)
+        orphaned = orphaned_s.get(s.task, 0.0)
+        lost_run = lost_run_s.get(s.task, 0.0)
+        kept = budget.undone_band_kept(
+            lattice,
+            s.sweep_width_m,
+            s.spacing_m,
+            task.sensor.lateral_range,
+            lanes=_lanes_per_searcher(s),
+            left=orphaned / lost_run if lost_run > 0 else 1.0,
+            undone=min(undone / orphaned, 1.0) if orphaned > 0 else 0.0,
+            lost=lost_run / need if need > 0 else 0.0,
+        )
         mines = s.design["mines_expected"]
         after = s.expected_detection * (1.0 - share * (1.0 - kept))
         if trips.total_m > 0 and mine_area is not None and mine_area.area > 0:

@@ -204,6 +204,63 @@ def test_an_undone_lane_keeps_what_the_inverse_cube_rates_of_the_others_give(spa
     )
 
 
+@pytest.mark.parametrize("undone", [0.0, 0.3, 1.0])
+def test_an_undone_band_keeps_what_its_driven_neighbours_reach(undone: float) -> None:
+    """Cookie cutter, W = 2S: each track sees one lane over, so an undone lane's strip is seen
+    half from each side. Alone it keeps everything; beside one undone lane, half (its driven side);
+    between two, nothing. A searcher lost before its track (`left` = 1) leaves its whole band: of
+    two lanes each has one band neighbour, undone with probability `undone`, so the band keeps
+    1 - undone / 2; of three lanes the edges keep that and the middle (1 - undone)^2 + undone
+    (1 - undone); a one-lane band keeps everything, less half for each neighbouring band's lane
+    undone (that searcher lost, with probability `lost`, and its lane not taken over)."""
+    s = 2.0
+
+    def kept(lanes: int, lost: float = 0.0) -> float:
+        return budget.undone_band_kept(
+            "cookie_cutter", 2 * s, s, lanes=lanes, left=1.0, undone=undone, lost=lost
+        )
+
+    assert kept(2) == pytest.approx(1.0 - undone / 2.0, abs=0.01)
+    middle = (1.0 - undone) ** 2 + undone * (1.0 - undone)
+    assert kept(3) == pytest.approx((2.0 * (1.0 - undone / 2.0) + middle) / 3.0, abs=0.01)
+    q = 0.4 * undone  # P(a neighbouring band's lane is undone): its searcher lost, the lane not taken
+    assert kept(1, lost=0.4) == pytest.approx((1.0 - q) ** 2 + q * (1.0 - q), abs=0.01)
+
+
+@pytest.mark.parametrize(
+    ("model", "w", "s", "curve"),
+    [
+        ("cookie_cutter", 2.65, 1.3, LateralRange(range_m=[0, 1, 2], probability=[1, 0.8, 0])),
+        ("inverse_cube", 3.0, 1.9, None),
+    ],
+)
+def test_an_undone_band_with_nothing_else_undone_keeps_what_one_lane_keeps(model, w, s, curve) -> None:
+    """With its neighbours always driven (one-lane bands, or every other piece taken over and no
+    neighbouring searcher lost) an undone lane keeps `undone_lane_kept`; with more of its band
+    undone, or more lost around it, less."""
+    alone = budget.undone_lane_kept(model, w, s, curve)
+
+    def kept(**kw) -> float:
+        return budget.undone_band_kept(model, w, s, curve, **{"lanes": 4.0, "left": 0.6, "undone": 0.5, **kw})
+
+    assert kept(lanes=1.0, lost=0.0) == pytest.approx(alone, abs=1e-3)  # a wider lattice
+    assert kept(undone=0.0) == pytest.approx(alone, abs=1e-3)
+    assert kept(undone=0.8) < kept(undone=0.5) < kept(undone=0.2) < alone
+    assert kept(lost=0.5) < kept(lost=0.0)
+    assert kept(left=0.9) < kept(left=0.3)  # lost earlier, more of the band is left
+
+
+def test_the_takeovers_run_into_the_search_window_s_slack(mission) -> None:
+    """The search must be done `WINDOW_SLACK` of its window before the clearance's retreat; the
+    lost tracks' takeovers may run on until the retreat."""
+    (task,) = [t for t in mission.tasks if t.type == "search"]
+    start, end = budget.search_window_s(mission, task, 600.0)
+    until = budget.takeover_end_s(mission, task)
+    retreat = budget.RETREAT_FACTOR * (task.clearance.standoff_m + budget.STANDOFF_MARGIN_M)
+    assert until == pytest.approx(task.clearance.at_s - retreat / mission.robot.wheel_speed_mps - 30.0)
+    assert end == pytest.approx(until - budget.WINDOW_SLACK * (until - start))
+
+
 @pytest.mark.parametrize("spacing", [1.5, 2.0, 3.0])
 def test_the_lanes_swept_before_have_found_part_of_what_lies_under_a_lane(spacing: float) -> None:
     """A mine under a lane has met the inverse-cube rates of the lanes swept before it, at S, 2S,

@@ -202,7 +202,7 @@ def test_plan_verdicts(plan):
     data = json.loads(plan_json(plan))
     detection = data["budget"]["search"]["search_1"]["expected_detection_after_losses"]
     # two searchers and a minute on the beach: the plan cannot promise much, judge it against 5%
-    assert detection <= data["search"][0]["expected_detection"]
+    assert detection < 0.5
     low = {**data, "criteria": {**data["criteria"], "min_detection_fraction": 0.05}}
     met = plan_data(low)["verdict"]
     assert met["status"] == "met" and met["text"].startswith("PLAN MEETS")

@@ -474,6 +474,7 @@ def test_plan_evaluate_prints_the_detection_beside_the_plan_s(tmp_path, capsys) 
     values = np.asarray(ev["detection_values"])
     sem = values.std(ddof=1) / np.sqrt(len(values))
     low, high = t.interval(0.95, len(values) - 1, loc=values.mean(), scale=sem) if sem else (found, found)
+    low, high = max(low, 0.0), min(high, 1.0)  # a share's interval stops at 0 and 1
     said = "agrees" if low <= planned <= high else ("optimistic" if planned > high else "conservative")
     line = next(x for x in printed.splitlines() if "in simulation" in x)
     assert (
