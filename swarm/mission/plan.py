@@ -113,6 +113,15 @@ class SearchPlan:
     #: the search design (`swarm.mission.budget.SearchDesign`) and what it should give after losses
     design: dict = field(default_factory=dict)
 
+    def rings(self) -> list:
+        """The area's outline as rings (`area_m` holds one ring, or a list of them for a
+        multipolygon)."""
+        return self.area_m if self.area_m and isinstance(self.area_m[0][0], list) else [self.area_m]
+
+    def polygon(self):
+        """The area as a shapely geometry (the rings' union)."""
+        return shapely.union_all([Polygon(r) for r in self.rings() if len(r) >= 3])
+
 
 @dataclass
 class RelayPlanOut:
@@ -256,23 +265,21 @@ class MissionPlan:
             )
         search = []
         for s in d.get("search", []):
-            rings = s["area_m"] if s["area_m"] and isinstance(s["area_m"][0][0], list) else [s["area_m"]]
-            area = sum(Polygon(r).area for r in rings if len(r) >= 3)
-            search.append(
-                SearchPlan(
-                    task=s["task"],
-                    area=s.get("area", ""),
-                    area_m=s["area_m"],
-                    sweep_width_m=float(s["sweep_width_m"]),
-                    spacing_m=float(s["spacing_m"]),
-                    model=s["model"],
-                    tracks=[[LineString(t) for t in run if len(t) >= 2] for run in s.get("tracks_m", [])],
-                    expected_detection=float(s["expected_detection"]),
-                    swath_coverage=float(s["swath_coverage"]),
-                    area_m2=area,
-                    design=dict(s.get("design", {})),
-                )
+            sp = SearchPlan(
+                task=s["task"],
+                area=s.get("area", ""),
+                area_m=s["area_m"],
+                sweep_width_m=float(s["sweep_width_m"]),
+                spacing_m=float(s["spacing_m"]),
+                model=s["model"],
+                tracks=[[LineString(t) for t in run if len(t) >= 2] for run in s.get("tracks_m", [])],
+                expected_detection=float(s["expected_detection"]),
+                swath_coverage=float(s["swath_coverage"]),
+                area_m2=0.0,
+                design=dict(s.get("design", {})),
             )
+            sp.area_m2 = sum(Polygon(r).area for r in sp.rings() if len(r) >= 3)
+            search.append(sp)
         relay = None
         if d.get("relay"):
             r = d["relay"]
@@ -714,7 +721,7 @@ def _row_length_m(polygon) -> float:
 def _lanes_per_searcher(search: SearchPlan) -> float:
     """How many lanes a searcher's band holds: its tracks' mean length over the lane length."""
     lengths = [sum(line.length for line in run) for run in search.tracks if run]
-    row = _row_length_m(shapely.Polygon(search.area_m))
+    row = _row_length_m(search.polygon())
     return float(np.mean(lengths)) / row if lengths and row > 0 else 1.0
 
 

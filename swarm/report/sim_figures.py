@@ -194,8 +194,7 @@ def _zoom(log: MissionLog) -> tuple[float, float, float, float]:
     """Bounds around the search areas, mines and detections, with a margin, inside the map."""
     pts = [log.mines_m.reshape(-1, 2), log.objects_m.reshape(-1, 2)]
     for sp in log.plan.search:
-        rings = sp.area_m if sp.area_m and isinstance(sp.area_m[0][0], list) else [sp.area_m]
-        pts += [np.asarray(r, dtype=float).reshape(-1, 2) for r in rings if len(r)]
+        pts += [np.asarray(r, dtype=float).reshape(-1, 2) for r in sp.rings() if len(r)]
     xy = np.vstack(pts)
     x0, y0, x1, y1 = log.plan.beach_map.bounds_m
     lo, hi = xy.min(axis=0), xy.max(axis=0)

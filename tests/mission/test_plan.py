@@ -14,7 +14,7 @@ from scipy.spatial import cKDTree
 
 from swarm.cli import main
 from swarm.mission import load_mission, mission_from_dict
-from swarm.mission.plan import ROLES, plan_json, plan_mission, write_plan
+from swarm.mission.plan import ROLES, SearchPlan, plan_json, plan_mission, write_plan
 from swarm.planning.costmap import FREE
 
 REPO = Path(__file__).resolve().parents[2]
@@ -164,6 +164,17 @@ def test_search_tracks_shared(mixed_plan):
         # after its ground route, a searcher follows its tracks
         assert any(tuple(p) in starts for p in r["waypoints_m"])
     assert data["expected_coverage"] == search["expected_detection"]
+
+
+def test_a_search_area_of_one_or_several_parts_reads_back_as_its_outline() -> None:
+    """`area_m` holds one ring, or a ring per part of a multipolygon: both read back as the area
+    (its square metres when a plan is loaded, its geometry where the budget needs its lanes)."""
+    square = [[0.0, 0.0], [100.0, 0.0], [100.0, 10.0], [0.0, 10.0], [0.0, 0.0]]
+    moved = [[x + 200.0, y] for x, y in square]
+    for area, m2 in ((square, 1000.0), ([square, moved], 2000.0)):
+        sp = SearchPlan("search_1", "a", area, 2.0, 1.0, "cookie_cutter", [], 0.9, 0.9, 0.0)
+        assert sp.polygon().area == pytest.approx(m2)
+        assert [list(map(list, r)) for r in sp.rings()] == (area if area is not square else [square])
 
 
 def test_cli_writes_files(tmp_path, capsys):
