@@ -564,11 +564,23 @@ def _lattice_detection(model: str, width_m: float, d: np.ndarray, curve: Lateral
     """Detection of a mine at each row of `d`, its distances (m) to the tracks passed, each law as
     the simulator draws it: inverse-cube rates add, a curve draws once per pass, a definite range
     sees to W/2."""
+    return _combined(*_per_track(model, width_m, d, curve))
+
+
+def _per_track(
+    model: str, width_m: float, d: np.ndarray, curve: LateralRange | None
+) -> tuple[bool, np.ndarray]:
+    """What each track passed at distances `d` does to a mine: (True, its inverse-cube rate), which
+    adds, or (False, its chance of missing the mine), which multiplies (`_combined`)."""
     if model == "inverse_cube" and curve is None:
-        rate = width_m**2 / (4.0 * math.pi) / np.maximum(np.abs(d), 1e-6) ** 2
-        return -np.expm1(-rate.sum(axis=1))
+        return True, width_m**2 / (4.0 * math.pi) / np.maximum(np.abs(d), 1e-6) ** 2
     p = lateral_range_p(curve, d) if curve is not None else (np.abs(d) <= width_m / 2.0).astype(np.float64)
-    return 1.0 - np.prod(1.0 - p, axis=1)
+    return False, 1.0 - p
+
+
+def _combined(rates: bool, terms: np.ndarray) -> np.ndarray:
+    """Each row's detection from its tracks' `_per_track` terms."""
+    return -np.expm1(-terms.sum(axis=1)) if rates else 1.0 - np.prod(terms, axis=1)
 
 
 def found_by_lanes_before(
@@ -631,24 +643,15 @@ class _KeptBeside:
         far = _lanes_reached(model, width_m, spacing_m, curve) + near
         self.k = np.arange(-far - 1, far + 2)
         y = (np.arange((2 * far + 1) * samples) + 0.5) / samples * spacing_m - (far + 0.5) * spacing_m
-        d = np.abs(y[:, None] - self.k[None, :] * spacing_m)
-        if model == "inverse_cube" and curve is None:  # as `_lattice_detection`: the rates add
-            self.rates = width_m**2 / (4.0 * math.pi) / np.maximum(d, 1e-6) ** 2
-        else:
-            self.rates = None
-            p = lateral_range_p(curve, d) if curve is not None else (d <= width_m / 2.0).astype(np.float64)
-            self.misses = 1.0 - p
+        self.rates, self.terms = _per_track(model, width_m, y[:, None] - self.k[None, :] * spacing_m, curve)
         self.lane = np.rint(y / spacing_m).astype(int)
         self.samples = samples
-        self.model, self.width_m, self.spacing_m = model, width_m, spacing_m
         self.full = self._detection(np.ones(len(self.k), bool))
         self.own = self.lane == 0
         self.nominal = float(self.full[self.own].mean())
 
     def _detection(self, tracks: np.ndarray) -> np.ndarray:
-        if self.rates is not None:
-            return -np.expm1(-self.rates[:, tracks].sum(axis=1))
-        return 1.0 - np.prod(self.misses[:, tracks], axis=1)
+        return _combined(self.rates, self.terms[:, tracks])
 
     def __call__(self, others: frozenset) -> float:
         if self.nominal <= 0.0:
