@@ -50,7 +50,7 @@ from swarm.mission.surf_speed import SurfZone
 from swarm.planning import CostMap, PlanningError, build_costmap, detection
 from swarm.planning.allocation import assign
 from swarm.planning.batch import plan_many
-from swarm.planning.coverage import boustrophedon, detection_probability, split_tracks, swath_coverage
+from swarm.planning.coverage import boustrophedon, split_tracks, swath_coverage
 from swarm.planning.detection import clip_tracks, drivable_segments
 from swarm.planning.radio import RadioParams, comm_range_m, link_margin_db
 from swarm.planning.relay import plan_relays, standable_grid
@@ -728,7 +728,9 @@ def _lanes_per_searcher(search: SearchPlan) -> float:
 def _lateral_range(sensor):
     """The sensor's tabulated lateral-range curve as p(d), or None (the model's own curve)."""
     curve = sensor.lateral_range
-    return None if curve is None else (lambda d: budget.lateral_range_p(curve, d))
+    if curve is None:
+        return None
+    return detection.LateralRangeCurve(tuple(curve.range_m), tuple(curve.probability))
 
 
 def _class_fractions(cm: CostMap, polygon) -> dict[str, float]:
@@ -1025,12 +1027,9 @@ def _budget(mission: Mission, plan: MissionPlan) -> dict:
         )
         mines = s.design["mines_expected"]
         after = s.expected_detection * (1.0 - share * (1.0 - kept))
-        if trips.total_m > 0 and mine_area is not None and mine_area.area > 0:
-            # the trips off the tracks (to lost tracks' pieces, to the mines to mark) search the
-            # area at random, sensors on: Koopman's 1 - exp(-W L / A) of what the tracks left
-            after += (1.0 - after) * detection_probability(
-                "random", s.sweep_width_m, None, trips.total_m, mine_area.area
-            )
+        if mine_area is not None:  # the trips off the tracks search what the ground lets them
+            reachable = s.design.get("reachable_detection", 1.0)
+            after = budget.with_trips(after, reachable, s.sweep_width_m, trips.total_m, mine_area.area)
         if mines > 0:
             after = max(0.0, after - unseen_blasts / mines)
         random_count = budget.mine_count_is_random(mission)

@@ -14,8 +14,11 @@ segments a robot can actually drive:
   a whole pass would detect with probability `INVERSE_CUBE_FLOOR` are cut, as the simulator cuts
   them (`inverse_cube_range_m`).
 - ``cookie_cutter`` and ``random_search``: detected within W/2 of a segment;
-- a tabulated lateral-range curve: one draw per segment at its closest approach,
-  p = 1 - prod (1 - p(d_k)).
+- a tabulated lateral-range curve (`LateralRangeCurve`): one draw per pass at its closest
+  approach, p = 1 - prod (1 - p(x_k)), where a pass is a run of joined segments of one track
+  within the curve's range, as the simulator draws (`swarm.sim.sensing`). A draw per segment
+  would count a pass again at every bend: a mine 1.5 m off the corner of a track was counted
+  found with 1 - 0.6^2 = 0.64 where the curve says 0.4 (tests/planning/test_detection.py).
 
 This is what the simulator does along the driven path (`swarm.sim.sensing`), so a plan that is
 driven as planned finds, on average, the fraction this module predicts.
@@ -25,7 +28,7 @@ from __future__ import annotations
 
 import itertools
 import math
-from collections.abc import Callable
+from dataclasses import dataclass
 
 import numba
 import numpy as np
@@ -42,6 +45,23 @@ INVERSE_CUBE_FLOOR = 1e-3
 MIN_LATERAL_M = 0.05
 #: Quasi-random points over the mine area: 2**SOBOL_POWER drawn in its bounding box.
 SOBOL_POWER = 15
+
+
+@dataclass(frozen=True)
+class LateralRangeCurve:
+    """A tabulated lateral-range curve: p(x) linear between its points, 0 beyond the last."""
+
+    range_m: tuple[float, ...]
+    probability: tuple[float, ...]
+
+    def __call__(self, x: np.ndarray) -> np.ndarray:
+        return np.interp(np.abs(np.asarray(x, dtype=np.float64)), self.range_m, self.probability, right=0.0)
+
+    @property
+    def max_range_m(self) -> float:
+        """Where p falls to 0 for good: a pass ends beyond it (`swarm.sim.sensing.max_range_m`)."""
+        last = max((k for k, p in enumerate(self.probability) if p > 0), default=0)
+        return float(self.range_m[min(last + 1, len(self.range_m) - 1)])
 
 
 def inverse_cube_range_m(sweep_width_m: float) -> float:
@@ -151,30 +171,51 @@ def detection_map(
     segments: np.ndarray,
     model: str,
     sweep_width_m: float,
-    lateral_range: Callable[[np.ndarray], np.ndarray] | None = None,
+    lateral_range: LateralRangeCurve | None = None,
 ) -> np.ndarray:
-    """Probability that each point is detected by sensors driven along `segments` (module docstring)."""
+    """Probability that each point is detected by sensors driven along `segments` (module
+    docstring). Segments in track order: each that starts where the one before it ends continues
+    its track (`drivable_segments` gives them so)."""
     n = len(points)
     if not len(segments) or not n:
         return np.zeros(n)
     a, b = segments[:, 0], segments[:, 1]
-    if model == "inverse_cube" and lateral_range is None:
-        reach = inverse_cube_range_m(sweep_width_m)
-    else:
-        reach = sweep_width_m / 2.0 if lateral_range is None else np.inf
+    if lateral_range is not None:
+        return _pass_detection(np.asarray(points, dtype=np.float64), a, b, lateral_range)
     # a block of segments at a time against every point keeps memory at (block x points)
     block = max(1, 2_000_000 // max(n, 1))
-    if model == "inverse_cube" and lateral_range is None:
-        exposure = _inverse_cube_exposure(points, a, b, reach, block)
+    if model == "inverse_cube":
+        exposure = _inverse_cube_exposure(points, a, b, inverse_cube_range_m(sweep_width_m), block)
         return -np.expm1(-(sweep_width_m**2) / (8.0 * math.pi) * exposure)
-    miss = np.ones(n)
+    reach = sweep_width_m / 2.0
+    seen = np.zeros(n, bool)
     for s in range(0, len(segments), block):
-        sa, sb = a[s : s + block, None, :], b[s : s + block, None, :]
-        d = segment_distance(sa, sb, points[None, :, :])
-        if lateral_range is not None:
-            miss *= np.prod(1.0 - lateral_range(d), axis=0)
-        else:
-            miss *= np.where((d <= reach).any(axis=0), 0.0, 1.0)
+        d = segment_distance(a[s : s + block, None, :], b[s : s + block, None, :], points[None, :, :])
+        seen |= (d <= reach).any(axis=0)
+    return seen.astype(np.float64)
+
+
+def _pass_detection(points: np.ndarray, a: np.ndarray, b: np.ndarray, curve: LateralRangeCurve) -> np.ndarray:
+    """A tabulated curve: one draw per pass at its closest approach. The (segment, point) pairs
+    within the curve's range (shapely's tree); a pass is a run of them, for one point, over
+    consecutive segments each starting where the one before it ends; it detects with p at its
+    least distance, and passes miss independently."""
+    reach = curve.max_range_m
+    lines = shapely.linestrings(np.stack([a, b], axis=1))
+    seg, pt = shapely.STRtree(shapely.points(points)).query(lines, predicate="dwithin", distance=reach)
+    miss = np.ones(len(points))
+    if not len(seg):
+        return 1.0 - miss
+    order = np.lexsort((seg, pt))
+    seg, pt = seg[order], pt[order]
+    d = segment_distance(a[seg], b[seg], points[pt])
+    joined = np.zeros(len(a), bool)
+    joined[1:] = np.hypot(*(a[1:] - b[:-1]).T) <= 1e-9 * (1.0 + np.abs(b[:-1]).max(axis=1))
+    new = np.ones(len(seg), bool)
+    new[1:] = (pt[1:] != pt[:-1]) | (seg[1:] != seg[:-1] + 1) | ~joined[seg[1:]]
+    starts = np.flatnonzero(new)
+    closest = np.minimum.reduceat(d, starts)
+    np.multiply.at(miss, pt[starts], 1.0 - curve(closest))
     return 1.0 - miss
 
 
@@ -230,7 +271,7 @@ def expected_detection(
     segments: np.ndarray,
     model: str,
     sweep_width_m: float,
-    lateral_range: Callable[[np.ndarray], np.ndarray] | None = None,
+    lateral_range: LateralRangeCurve | None = None,
     ground: CostMap | None = None,
 ) -> float:
     """Expected fraction of mines uniform over `area` (over its ground that can be crossed, with

@@ -639,3 +639,15 @@ def test_every_robot_launched_ends_lost_expended_or_back_at_sea() -> None:
     low, high = b["expected_recovered"]
     assert low == high
     assert b["expected_lost"] + high == pytest.approx(24)
+
+
+def test_the_trips_search_at_random_only_what_a_robot_can_reach() -> None:
+    """Koopman's random search, 1 - exp(-W L / A), of what the tracks left up to the ground's reach:
+    nothing beyond the dense lanes' detection, nothing without trips."""
+    w, length, area = 2.0, 1000.0, 20_000.0
+    koopman = 1.0 - math.exp(-w * length / area)
+    assert budget.with_trips(0.9, 1.0, w, length, area) == pytest.approx(1.0 - 0.1 * (1.0 - koopman))
+    assert budget.with_trips(0.9, 0.95, w, length, area) == pytest.approx(0.9 + 0.05 * koopman)
+    assert budget.with_trips(0.9, 0.95, w, 0.0, area) == 0.9
+    assert budget.with_trips(0.96, 0.95, w, length, area) == 0.96  # the tracks already reach further
+    assert budget.with_trips(0.9, 0.95, w, 1e9, area) == pytest.approx(0.95)

@@ -15,6 +15,7 @@ from swarm.planning import build_costmap
 from swarm.planning.coverage import detection_probability
 from swarm.planning.detection import (
     INVERSE_CUBE_FLOOR,
+    LateralRangeCurve,
     clip_tracks,
     detection_map,
     drivable_segments,
@@ -62,8 +63,36 @@ def test_one_straight_pass_is_the_lateral_range_curve() -> None:
     # the look of a whole pass is 2 / x^2
     np.testing.assert_allclose(inverse_cube_look(track[:, 0], track[:, 1], pts), 2 / x**2, rtol=1e-4)
     # a tabulated curve is drawn once per pass at the closest approach
-    table = lambda d: np.interp(d, [0.0, 1.0, 2.0], [0.9, 0.5, 0.0], right=0.0)  # noqa: E731
+    table = LateralRangeCurve((0.0, 1.0, 2.0), (0.9, 0.5, 0.0))
     np.testing.assert_allclose(detection_map(pts, track, "inverse_cube", w, table), table(x))
+
+
+def test_a_tabulated_curve_draws_once_per_pass_however_the_track_bends() -> None:
+    """The simulator draws once per pass, at its closest approach; a pass is a track's run within
+    the curve's range. A draw per segment would find a mine off a corner with 1 - (1 - p)^2."""
+    curve = LateralRangeCurve((0.0, 0.5, 1.0, 1.5, 2.0), (1.0, 0.95, 0.8, 0.4, 0.0))
+    assert curve.max_range_m == 2.0
+    corner = np.array([[[-20.0, 0.0], [0.0, 0.0]], [[0.0, 0.0], [0.0, 20.0]]])
+    mine = np.array([[1.0, -1.0]])  # sqrt(2) m from the corner, abeam neither leg
+    p = float(np.interp(math.sqrt(2.0), [1.0, 1.5], [0.8, 0.4]))
+    np.testing.assert_allclose(detection_map(mine, corner, "cookie_cutter", 2.65, curve), [p])
+    # the same corner in half-metre pieces, as a route's samples come: still one pass
+    out = np.linspace([-20.0, 0.0], [0.0, 0.0], 41)
+    up = np.linspace([0.0, 0.0], [0.0, 20.0], 41)
+    pts = np.vstack([out, up[1:]])
+    pieces = np.stack([pts[:-1], pts[1:]], axis=1)
+    np.testing.assert_allclose(detection_map(mine, pieces, "cookie_cutter", 2.65, curve), [p])
+    # a hairpin leaves the range between its legs: two passes, each 1.5 m off
+    hairpin = np.array([[[0.0, 0.0], [50.0, 0.0]], [[50.0, 0.0], [50.0, 3.0]], [[50.0, 3.0], [0.0, 3.0]]])
+    np.testing.assert_allclose(
+        detection_map(np.array([[10.0, 1.5]]), hairpin, "cookie_cutter", 2.65, curve), [1.0 - 0.6**2]
+    )
+    # two tracks, even end to end in the list, are two passes when the second does not start
+    # where the first ends
+    apart = np.array([[[0.0, 0.0], [20.0, 0.0]], [[0.0, 3.0], [20.0, 3.0]]])
+    np.testing.assert_allclose(
+        detection_map(np.array([[10.0, 1.5]]), apart, "cookie_cutter", 2.65, curve), [1.0 - 0.6**2]
+    )
 
 
 def test_the_range_cut_is_where_a_pass_detects_with_the_floor() -> None:
