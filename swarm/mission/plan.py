@@ -730,7 +730,7 @@ def _lateral_range(sensor):
     curve = sensor.lateral_range
     if curve is None:
         return None
-    return detection.LateralRangeCurve(tuple(curve.range_m), tuple(curve.probability))
+    return detection.LateralRangeCurve.of(curve)
 
 
 def _class_fractions(cm: CostMap, polygon) -> dict[str, float]:

@@ -54,6 +54,11 @@ class LateralRangeCurve:
     range_m: tuple[float, ...]
     probability: tuple[float, ...]
 
+    @classmethod
+    def of(cls, curve) -> LateralRangeCurve:
+        """From a mission's `lateral_range:` (`swarm.mission.schema.LateralRange`)."""
+        return cls(tuple(map(float, curve.range_m)), tuple(map(float, curve.probability)))
+
     def __call__(self, x: np.ndarray) -> np.ndarray:
         return np.interp(np.abs(np.asarray(x, dtype=np.float64)), self.range_m, self.probability, right=0.0)
 

@@ -78,6 +78,7 @@ from shapely.geometry.base import BaseGeometry
 from swarm.mission import schema
 from swarm.planning.coverage import inverse_cube_lateral_range
 from swarm.planning.detection import (
+    LateralRangeCurve,
     inverse_cube_look,
     inverse_cube_range_m,
     segment_distance,
@@ -116,16 +117,10 @@ def lateral_range_curve(sensor: schema.Sensor) -> Callable[[np.ndarray], np.ndar
     """The sensor's p(x): detection probability of an object passed at closest distance |x|
     (a partial of a module function, so an environment holding it pickles)."""
     if sensor.lateral_range is not None:
-        r = np.asarray(sensor.lateral_range.range_m, dtype=np.float64)
-        p = np.asarray(sensor.lateral_range.probability, dtype=np.float64)
-        return functools.partial(_tabulated_p, r=r, p=p)
+        return LateralRangeCurve.of(sensor.lateral_range)
     if sensor.model == "inverse_cube":
         return functools.partial(_inverse_cube_p, w=sensor.width_m)
     return functools.partial(_definite_range_p, w=sensor.width_m)
-
-
-def _tabulated_p(x: np.ndarray, r: np.ndarray, p: np.ndarray) -> np.ndarray:
-    return np.interp(np.abs(np.asarray(x, dtype=np.float64)), r, p, right=0.0)
 
 
 def _inverse_cube_p(x: np.ndarray, w: float) -> np.ndarray:
@@ -140,9 +135,7 @@ def max_range_m(sensor: schema.Sensor) -> float:
     """The distance beyond which p(x) is 0 (below `INVERSE_CUBE_FLOOR` for the inverse cube, from
     1 - exp(-W^2 / (4 pi R^2)) = floor)."""
     if sensor.lateral_range is not None:
-        r, p = sensor.lateral_range.range_m, sensor.lateral_range.probability
-        last = max(k for k, pk in enumerate(p) if pk > 0)
-        return float(r[min(last + 1, len(r) - 1)])
+        return LateralRangeCurve.of(sensor.lateral_range).max_range_m
     w = sensor.width_m
     if sensor.model == "inverse_cube":
         return inverse_cube_range_m(w)
