@@ -62,6 +62,7 @@ from shapely.geometry.base import BaseGeometry
 
 from swarm.mission.schema import DETECTION_CONFIDENCE, LateralRange, Mission
 from swarm.planning import CostMap
+from swarm.planning.detection import LateralRangeCurve
 from swarm.world.coastal import local_breaker_height, surf_zone_mask
 
 #: The detection criterion is designed to hold with this probability over the mine field's draw,
@@ -222,7 +223,7 @@ def undetected_at_contact(mission: Mission, speed_mps: float = 0.0) -> float:
         # a pass that closes on a mine draws down to its least distance (`swarm.sim.sensing`), an
         # offset uniform over the trigger radius for a mine the robot meets
         x = np.linspace(0.0, r, 65)
-        return float(1.0 - lateral_range_p(sensor.lateral_range, x).mean())
+        return float(1.0 - LateralRangeCurve.of(sensor.lateral_range)(x).mean())
     if sensor.model == "inverse_cube":
         d = r + REACTION_S * speed_mps
         return math.exp(-(sensor.width_m**2) / (16.0 * math.pi * d * d))
@@ -565,13 +566,6 @@ def parallel_sweep_detection(curve: LateralRange, spacing_m: float, samples: int
     return float(_lattice_detection("cookie_cutter", 0.0, offsets, curve).mean())
 
 
-def lateral_range_p(curve: LateralRange, d: np.ndarray) -> np.ndarray:
-    """A tabulated lateral-range curve's detection probability at distances `d` abeam (linear
-    between its points, 0 beyond the last)."""
-    r = np.asarray(curve.range_m, dtype=np.float64)
-    return np.interp(np.abs(d), r, np.asarray(curve.probability, dtype=np.float64), right=0.0)
-
-
 def _lattice_detection(model: str, width_m: float, d: np.ndarray, curve: LateralRange | None) -> np.ndarray:
     """Detection of a mine at each row of `d`, its distances (m) to the tracks passed, each law as
     the simulator draws it: inverse-cube rates add, a curve draws once per pass, a definite range
@@ -586,8 +580,9 @@ def _per_track(
     adds, or (False, its chance of missing the mine), which multiplies (`_combined`)."""
     if model == "inverse_cube" and curve is None:
         return True, width_m**2 / (4.0 * math.pi) / np.maximum(np.abs(d), 1e-6) ** 2
-    p = lateral_range_p(curve, d) if curve is not None else (np.abs(d) <= width_m / 2.0).astype(np.float64)
-    return False, 1.0 - p
+    if curve is not None:
+        return False, 1.0 - LateralRangeCurve.of(curve)(d)
+    return False, 1.0 - (np.abs(d) <= width_m / 2.0).astype(np.float64)
 
 
 def _combined(rates: bool, terms: np.ndarray) -> np.ndarray:

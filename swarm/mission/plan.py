@@ -728,9 +728,7 @@ def _lanes_per_searcher(search: SearchPlan) -> float:
 def _lateral_range(sensor):
     """The sensor's tabulated lateral-range curve as p(d), or None (the model's own curve)."""
     curve = sensor.lateral_range
-    if curve is None:
-        return None
-    return detection.LateralRangeCurve.of(curve)
+    return None if curve is None else detection.LateralRangeCurve.of(curve)
 
 
 def _class_fractions(cm: CostMap, polygon) -> dict[str, float]:

@@ -64,7 +64,7 @@ class LateralRangeCurve:
 
     @property
     def max_range_m(self) -> float:
-        """Where p falls to 0 for good: a pass ends beyond it (`swarm.sim.sensing.max_range_m`)."""
+        """Where p falls to 0 for good: the simulator ends a pass beyond it (`swarm.sim.sensing`)."""
         last = max((k for k, p in enumerate(self.probability) if p > 0), default=0)
         return float(self.range_m[min(last + 1, len(self.range_m) - 1)])
 
