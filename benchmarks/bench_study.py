@@ -42,7 +42,7 @@ table's `runtime_s`) and the rest ("overhead": start-up, Ray's init and shutdown
 last run while the other worker idles, writing results), wall - busy / K.
 
 Planning: a worker loads the mission and plans its routes (`plan_mission`) once per point, at its
-first run, and keeps the plan (`swarm.studies.runner._prepared`). So with 2 workers the same plan is
+first run, and keeps the plan (`swarm.studies.runner._prepared_at`). So with 2 workers the same plan is
 made twice, once in each, at the same time; that cost cannot be taken out of a run_study call by
 warming up, since the workers are fresh processes each time. It is measured separately instead, in
 a fresh Python process (as a worker has it: the imports done, then `load_mission` and a first
@@ -238,7 +238,7 @@ def measure_preparation(mission: Path) -> dict[str, float]:
 
 def measure_study(spec: StudySpec, backend: str, workers: int) -> Result:
     """Time one run_study into a fresh folder; read back its results table."""
-    runner._prepared.cache_clear()  # the in-process 1-worker run must plan like a fresh worker
+    runner._prepared_at.cache_clear()  # the in-process 1-worker run must plan like a fresh worker
     with tempfile.TemporaryDirectory(prefix=f"bench_study-{backend}{workers}-") as out:
         with CpuMeter() as cpu:
             t0 = time.perf_counter()
@@ -284,8 +284,8 @@ def measure_today(spec: StudySpec, ref: str, src: Path, out: Path) -> tuple[floa
 
 def measure_batched(spec: StudySpec, batch: int | None, out: Path) -> tuple[float, pa.Table]:
     """`run_study` on one worker in this process, batches of `batch` runs (None: automatic)."""
-    runner._prepared.cache_clear()  # plan like a fresh worker
-    runner._setup.cache_clear()
+    runner._prepared_at.cache_clear()  # plan like a fresh worker
+    runner._setup_at.cache_clear()
     t0 = time.perf_counter()
     run_study(spec, out, workers=1, batch=batch)
     wall = time.perf_counter() - t0

@@ -188,6 +188,23 @@ def _check_output(path: Path | None, option: str, suffixes: tuple[str, ...]) -> 
         ) from None
 
 
+def _check_replaces(path: Path | None, option: str, key: str, what: str) -> None:
+    """Refuse to write over an existing file that is not a `what` (a YAML mapping with `key`):
+    `--out missions/recon.yaml` on `map generate` or `model calibrate` would destroy the mission."""
+    if path is None or not path.exists():
+        return
+    import yaml
+
+    try:
+        doc = yaml.safe_load(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, yaml.YAMLError):
+        doc = None
+    if not isinstance(doc, dict) or key not in doc:
+        raise InputError(
+            "command line", option, str(path), f"a new file or {what} to replace (this is not one)"
+        )
+
+
 FIGURE_SUFFIXES = (".png", ".svg", ".pdf")
 
 
@@ -202,6 +219,16 @@ def _check_folder(path: Path | None, option: str) -> None:
         raise InputError(
             "command line", option, str(path), f"a folder in an existing folder ({parent} is not one)"
         )
+
+
+#: Seeds are unsigned 64-bit integers: numpy's `SeedSequence` takes any, a study's table holds these.
+SEED_LIMIT = 2**64
+
+
+def _check_seed(option: str, value: int | None) -> None:
+    """Refuse a seed a run's table could not hold, the same range for every command."""
+    if value is not None and not 0 <= value < SEED_LIMIT:
+        raise InputError("command line", option, value, "a seed from 0 to 2**64 - 1")
 
 
 #: A progress bar is drawn once its work has run this long (s): input refused at the start of the
@@ -427,6 +454,7 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
     from swarm.robot.params import load_robot
 
     _check_output(args.out, "--out", (".yaml", ".yml"))
+    _check_replaces(args.out, "--out", "modes", "a terrain YAML")
     robot = load_robot(args.robot)
     base = _choose_mode(args)
     if args.mode is not None:
@@ -587,6 +615,7 @@ def _map_name(args: argparse.Namespace) -> str:
 
 def _cmd_map_generate(args: argparse.Namespace) -> int:
     _check_output(args.out, "--out", MAP_SUFFIXES)
+    _check_replaces(args.out, "--out", "grid", "a map YAML")
     given = {
         "length_m": args.length_m,
         "width_m": args.width_m,
@@ -603,8 +632,7 @@ def _cmd_map_generate(args: argparse.Namespace) -> int:
         value = getattr(args, key)
         if value is not None and not 0 <= value < float("inf"):
             raise InputError("command line", "--" + key.replace("_", "-"), value, "a number >= 0")
-    if args.seed is not None and args.seed < 0:
-        raise InputError("command line", "--seed", args.seed, "a non-negative integer")
+    _check_seed("--seed", args.seed)
     from swarm.world.generate import generate_beach
     from swarm.world.io import save_map
 
@@ -615,7 +643,14 @@ def _cmd_map_generate(args: argparse.Namespace) -> int:
         "river_mouth": True if args.river_mouth else None,
     }
     options = {k: v for k, v in {"seed": args.seed, **given, **extra}.items() if v is not None}
-    beach_map = generate_beach(name=_map_name(args), **options)
+    try:
+        beach_map = generate_beach(name=_map_name(args), **options)
+    except InputError as exc:  # its ranges, as the flag that gave the value
+        if exc.where not in options:
+            raise
+        raise InputError(
+            "command line", "--" + exc.where.replace("_", "-"), exc.found, exc.expected
+        ) from None
     save_map(beach_map, args.out)
     rows, cols = beach_map.shape
     print(
@@ -626,9 +661,14 @@ def _cmd_map_generate(args: argparse.Namespace) -> int:
 
 
 def _cmd_map_import_dem(args: argparse.Namespace) -> int:
-    from swarm.world.io import map_from_dem, save_map
+    from swarm.world.io import MAX_ELEVATION_M, map_from_dem, save_map
 
     _check_output(args.out, "--out", MAP_SUFFIXES)
+    if args.fill is not None and not abs(args.fill) <= MAX_ELEVATION_M:
+        raise InputError(
+            "command line", "--fill", args.fill, f"an elevation (m) within +-{MAX_ELEVATION_M:g} m"
+        )
+    _check_replaces(args.out, "--out", "grid", "a map YAML")
     beach_map = map_from_dem(args.dem, _map_name(args), fill=args.fill)
     save_map(beach_map, args.out)
     rows, cols = beach_map.shape
@@ -640,6 +680,10 @@ def _cmd_map_import_dem(args: argparse.Namespace) -> int:
 
 
 # --- swarm path: OMPL path planning (swarm/planning) -------------------------------------------
+#: Runs per profile of `swarm path --benchmark` unless --runs says otherwise.
+BENCHMARK_RUNS = 10
+
+
 def _add_path_command(commands) -> None:
     """`swarm path MAP --from X,Y --to X,Y`, or `--benchmark P1.yaml,P2.yaml -o bench.log`."""
     path = commands.add_parser(
@@ -662,7 +706,7 @@ def _add_path_command(commands) -> None:
     bench.add_argument(
         "--benchmark", metavar="P1.yaml,P2.yaml", help="comma-separated profiles to benchmark on the map"
     )
-    bench.add_argument("--runs", type=int, default=10, help="runs per profile (default 10)")
+    bench.add_argument("--runs", type=int, help=f"runs per profile (default {BENCHMARK_RUNS})")
     bench.add_argument(
         "--time", type=float, metavar="S", help="seconds per run (default: the profiles' time_s, else 1)"
     )
@@ -717,8 +761,7 @@ def _cmd_plan(args: argparse.Namespace) -> int:
     from swarm.sim.memory import check_fits
     from swarm.studies.sweep import check_study_size
 
-    if args.seed is not None and args.seed < 0:
-        raise InputError("command line", "--seed", args.seed, "a seed >= 0")
+    _check_seed("--seed", args.seed)
     if args.workers is not None and args.workers < 1:
         raise InputError("command line", "--workers", args.workers, "at least 1")
     if args.evaluate < 0:
@@ -890,9 +933,8 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     from swarm.sim.render import Animator, check_animation_path
     from swarm.sim.run import simulate, write_log
 
-    for option, value in (("--seed", args.seed), ("--plan-seed", args.plan_seed)):
-        if value is not None and not 0 <= value < 2**64:
-            raise InputError("command line", option, value, "a seed from 0 to 2**64 - 1")
+    _check_seed("--seed", args.seed)
+    _check_seed("--plan-seed", args.plan_seed)
     if args.workers is not None and args.workers < 1:
         raise InputError("command line", "--workers", args.workers, "at least 1")
     if args.animate is not None:
@@ -988,7 +1030,8 @@ def _cmd_path(args: argparse.Namespace) -> int:
 
     start, goal = _xy_arg("--from", args.start), _xy_arg("--to", args.goal)
     if args.benchmark is None:
-        for option, value in (("--out", args.out), ("--time", args.time), ("--objective", args.objective)):
+        benchmark_only = (("--out", args.out), ("--runs", args.runs), ("--time", args.time))
+        for option, value in (*benchmark_only, ("--objective", args.objective)):
             if value is not None:
                 raise InputError("command line", option, str(value), "--benchmark P1.yaml,P2.yaml with it")
         if start is None or goal is None:
@@ -1008,6 +1051,7 @@ def _cmd_path(args: argparse.Namespace) -> int:
             raise InputError(
                 "command line", "--from/--to", "one of them", "both, or neither (a default query)"
             )
+        args.runs = BENCHMARK_RUNS if args.runs is None else args.runs
         if args.runs < 1:
             raise InputError("command line", "--runs", args.runs, "a positive number of runs")
         if args.time is not None and not args.time > 0:
@@ -1142,8 +1186,7 @@ def _cmd_study(args: argparse.Namespace) -> int:
 
     if args.runs < 1:
         raise InputError("command line", "--runs", args.runs, "at least 1 run per point")
-    if args.seed < 0:
-        raise InputError("command line", "--seed", args.seed, "a seed >= 0")
+    _check_seed("--seed", args.seed)
     if args.workers is not None and args.workers < 1:
         raise InputError("command line", "--workers", args.workers, "at least 1")
     if args.batch is not None and args.batch < 1:
@@ -1248,15 +1291,19 @@ def _cmd_report(args: argparse.Namespace) -> int:
     to_stdout = args.out == "-"
     out = None if args.out is None or to_stdout else Path(args.out)
     if out is not None:
+        if out.is_dir():
+            raise InputError("command line", "-o", str(out), "a file name (this is a folder)")
         by_suffix = format_for(out)
+        if by_suffix is None:
+            raise InputError(
+                "command line", "-o", str(out), "a file name ending in .html, .htm, .md, .markdown or .json"
+            )
         if fmt is None:
-            fmt = by_suffix or "html"
-        elif by_suffix is not None and by_suffix != fmt:
+            fmt = by_suffix
+        elif by_suffix != fmt:
             raise InputError(
                 "command line", "-o", str(out), f"a file name for --format {fmt} (a {FORMATS[fmt]} file)"
             )
-        if out.is_dir():
-            raise InputError("command line", "-o", str(out), "a file name (this is a folder)")
         parent = out.parent if str(out.parent) else Path(".")
         if not parent.is_dir():
             raise InputError(
@@ -1273,6 +1320,11 @@ def _cmd_report(args: argparse.Namespace) -> int:
                 "command line", "PATH", str(folder), "a folder this user may write the report in (or -o)"
             )
     into_folder = out is not None and out.resolve().parent == folder.resolve()
+    if into_folder and out.exists() and fmt == "json" and out.name != "report.json":
+        # the folder's other JSON files (plan.json, outcome.json, summary.json) are the report's inputs
+        raise InputError(
+            "command line", "-o", str(out), f"a new file or report.json, not the folder's {out.name}"
+        )
     with _output_folder(folder, args) if into_folder else contextlib.nullcontext():
         report = report_for(args.path, date=today())
         if to_stdout:

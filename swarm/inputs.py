@@ -341,7 +341,8 @@ def describe(
     bounds = {"greater_than": ">", "greater_than_equal": ">=", "less_than": "<", "less_than_equal": "<="}
     if typ in bounds:
         limit = next(iter(ctx.values())) if ctx else "?"
-        limit_text = f"{limit:g}" if _is_plain_number(limit) else str(limit)
+        plain = _is_plain_number(limit) and not isinstance(limit, int)  # an int as written: 2**64 - 1
+        limit_text = f"{limit:g}" if plain else str(limit)
         return parts, value, f"{_number_words(at)} {bounds[typ]} {limit_text}"
     if typ == "literal_error":
         return parts, _short(value), _literal_words(at, ctx)

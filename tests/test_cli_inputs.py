@@ -225,3 +225,87 @@ def test_a_bar_of_runs_never_goes_back_and_shows_a_share_to_one_decimal() -> Non
     _count_runs(bar, 2.0, 6)
     assert bar.n == 2 and isinstance(bar.n, int) and "2/6" in str(bar)
     bar.close()
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["plan", "MISSION", "--seed", str(2**64)],
+        ["simulate", "MISSION", "--plan-seed", str(2**64)],
+        ["study", "MISSION", "--runs", "1", "--seed", str(2**64)],
+        ["map", "generate", "--seed", "-1", "-o", "OUT/m.yaml"],
+    ],
+    ids=["plan", "simulate", "study", "map generate"],
+)
+def test_every_command_takes_the_same_seeds(argv, tmp_path, capsys) -> None:
+    """`plan --seed` took any integer and a study's table then failed on 2**64 with a traceback."""
+    mission = str(REPO / "missions" / "landing.yaml")
+    argv = [a.replace("MISSION", mission).replace("OUT", str(tmp_path)) for a in argv]
+    assert main(argv) == 2
+    option = argv[argv.index("--seed" if "--seed" in argv else "--plan-seed")]
+    value = argv[argv.index(option) + 1]
+    assert capsys.readouterr().err == (
+        f"swarm: error: command line: {option}: found {int(value)}, expected a seed from 0 to 2**64 - 1\n"
+    )
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_an_output_never_replaces_an_input_of_another_kind(tmp_path, capsys) -> None:
+    """`map generate -o` replaced a mission with a map, `model calibrate --out` the robot file it
+    read with a terrain file; both now refuse a file that is not what they write."""
+    mission = tmp_path / "mission.yaml"
+    mission.write_text((REPO / "missions" / "recon.yaml").read_text())
+    robot = tmp_path / "robot.yaml"
+    robot.write_text((REPO / "swarm" / "data" / "robots" / "skid4.yaml").read_text())
+    runs = REPO / "swarm" / "data" / "robot-runs"
+    calibrate = ["model", "calibrate", "--robot", str(robot), "--mode", "wet_hard_sand", "--out", str(robot)]
+    calibrate += ["--encoders", str(runs / "hardsand_straight_encoders.txt")]
+    calibrate += ["--truth", str(runs / "hardsand_straight_truth.txt")]
+    for argv, out, what in (
+        (
+            ["map", "generate", "--length-m", "60", "--width-m", "120", "-o", str(mission)],
+            mission,
+            "a map YAML",
+        ),
+        (calibrate, robot, "a terrain YAML"),
+    ):
+        before = out.read_bytes()
+        assert main(argv) == 2
+        assert capsys.readouterr().err == (
+            f"swarm: error: command line: --out: found '{out}', expected a new file or {what} to replace"
+            " (this is not one)\n"
+        )
+        assert out.read_bytes() == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["mission.yaml", "robot.yaml"]
+
+
+def test_a_report_is_written_only_as_a_report(tmp_path, capsys) -> None:
+    """`swarm report DIR -o DIR/plan.json` replaced the plan it reported, `-o x.pdf` wrote HTML."""
+    out = tmp_path / "plan"
+    assert main(["plan", str(REPO / "missions" / "landing.yaml"), "--out", str(out)]) == 0
+    capsys.readouterr()
+    plan = (out / "plan.json").read_bytes()
+    for target, expected in (
+        (out / "plan.json", "a new file or report.json, not the folder's plan.json"),
+        (tmp_path / "r.pdf", "a file name ending in .html, .htm, .md, .markdown or .json"),
+        (tmp_path / "mission.yaml", "a file name ending in .html, .htm, .md, .markdown or .json"),
+    ):
+        assert main(["report", str(out), "-o", str(target)]) == 2
+        assert (
+            capsys.readouterr().err
+            == f"swarm: error: command line: -o: found '{target}', expected {expected}\n"
+        )
+    assert (out / "plan.json").read_bytes() == plan
+    assert not (tmp_path / "r.pdf").exists() and not (tmp_path / "mission.yaml").exists()
+    assert main(["report", str(out), "-o", str(out / "report.json")]) == 0  # its own report, again
+    assert main(["report", str(out), "-o", str(out / "landing.md")]) == 0
+    assert (out / "landing.md").read_text().startswith("# ")
+
+
+def test_a_benchmark_option_without_a_benchmark_is_refused(capsys) -> None:
+    """`swarm path MAP --from --to --runs 5` planned once and ignored --runs."""
+    argv = ["path", str(REPO / "maps" / "test_small.yaml"), "--from", "20,52", "--to", "55,52", "--runs", "5"]
+    assert main(argv) == 2
+    assert capsys.readouterr().err == (
+        "swarm: error: command line: --runs: found '5', expected --benchmark P1.yaml,P2.yaml with it\n"
+    )

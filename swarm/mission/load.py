@@ -33,6 +33,7 @@ from pathlib import Path
 from typing import Any
 
 from pydantic import ValidationError
+from shapely.geometry import Point
 
 from swarm.errors import InputError
 from swarm.files import read_yaml
@@ -194,6 +195,8 @@ def _need_file(report: _Report, parts: Parts, value: str, path: Path, what: str,
     if bundled is not None and len(Path(value).parts) == 1 and Path(value).suffix not in (".yaml", ".yml"):
         names = ", ".join(sorted(p.stem for p in _bundled(bundled).glob("*.yaml")))
         expected = f"a bundled {what} ({names}) or the path of a {what} relative to the mission file"
+    elif path.is_dir():
+        expected = f"a {what}, not a folder ({_display(path)} is one)"
     else:
         expected = (
             f"an existing {what} ({_display(path)} does not exist; paths are relative to the mission file)"
@@ -285,6 +288,13 @@ class _References:
                 raise self.report.error(
                     parts, found, f"a point on passable dry ground{why}; it is on {mode_name}"
                 )
+        if ground == "land":  # no robot may drive there: the planner would quietly move the point
+            here = Point(x, y)
+            for r in bm.regions.values():
+                if r.kind == "keep_out" and r.geometry.covers(here):
+                    raise self.report.error(
+                        parts, found, f"a point outside the map's keep_out regions{why}; it is in {r.name}"
+                    )
         return x, y
 
     def region(self, parts: Parts, name: str, kinds: tuple[str, ...]) -> None:

@@ -748,12 +748,28 @@ class Mission(_Model):
     success: Success = Field(default_factory=Success)
     hazards: Hazards = Field(default_factory=Hazards)
     seed: int = Field(
-        0, ge=0, description="Random seed: the same seed gives the same plan and run. Default 0."
+        0,
+        ge=0,
+        le=2**64 - 1,
+        description="Random seed: the same seed gives the same plan and run. Default 0.",
     )
 
     # set by swarm.mission.load: where the file was, and what its references resolved to
     _source: str | None = PrivateAttr(None)
     _resolved: dict[str, Any] = PrivateAttr(default_factory=dict)
+
+    @model_validator(mode="after")
+    def _name_is_a_file_name(self) -> Mission:
+        # the default output folders are reports/<name>-...: a name with a separator would write
+        # them elsewhere
+        name = self.name
+        if name is not None and (any(c in "/\\" or ord(c) < 32 for c in name) or name.strip() != name):
+            raise _expected(
+                "a name usable as a file name (no / or \\, control characters, or spaces at the ends)",
+                found=name,
+                key="name",
+            )
+        return self
 
     @property
     def source(self) -> str | None:

@@ -158,6 +158,8 @@ class _Written(BaseModel):
 
 
 class _RobotEntry(_Written):
+    model_config = ConfigDict(extra="ignore", strict=True, frozen=True, allow_inf_nan=False)
+
     id: str
     role: str
     task: str | None = None

@@ -10,6 +10,7 @@ each, so no figure relies on colour alone. Every function returns None when ther
 
 from __future__ import annotations
 
+import json
 import math
 from collections.abc import Sequence
 
@@ -121,6 +122,11 @@ def x_key(summary: dict) -> str | None:
     return keys[0] if keys else None
 
 
+def _hashable(value: object) -> object:
+    """A swept value as a key of the figures' lookups: itself, or a list's or mapping's JSON."""
+    return json.dumps(value, sort_keys=True, default=str) if isinstance(value, list | dict) else value
+
+
 def _numeric(values: Sequence[object]) -> bool:
     return all(isinstance(v, int | float) and not isinstance(v, bool) for v in values)
 
@@ -136,7 +142,7 @@ def _x_positions(summary: dict, key: str | None) -> tuple[dict, list[str] | None
             values.append(v)
     if _numeric(values):
         return {v: float(v) for v in values}, None
-    return {v: float(i) for i, v in enumerate(values)}, [format_value(v) for v in values]
+    return {_hashable(v): float(i) for i, v in enumerate(values)}, [format_value(v) for v in values]
 
 
 def _series(summary: dict, key: str | None) -> tuple[dict, list[str] | None, list[str], dict, float]:
@@ -147,7 +153,7 @@ def _series(summary: dict, key: str | None) -> tuple[dict, list[str] | None, lis
     series: dict[tuple, list[dict]] = {}
     for p in summary.get("points") or []:
         params = p.get("params", {})
-        series.setdefault(tuple(params.get(k) for k in others), []).append(p)
+        series.setdefault(tuple(_hashable(params.get(k)) for k in others), []).append(p)
     xs = sorted(set(positions.values()))
     gap = float(min(np.diff(xs))) if len(xs) > 1 else 1.0
     return positions, ticks, others, series, gap
@@ -176,9 +182,9 @@ def success_png(summary: dict) -> bytes | None:
     fig, ax = new_figure(7.5, 4.2, layout="constrained")
     for i, (combo, pts) in enumerate(series.items()):
         colour, marker, style = SERIES_STYLES[i % len(SERIES_STYLES)]
-        pts = sorted(pts, key=lambda p: positions[p.get("params", {}).get(key)])
+        pts = sorted(pts, key=lambda p: positions[_hashable(p.get("params", {}).get(key))])
         dodge = 0.04 * gap * (i - (len(series) - 1) / 2)  # keeps overlapping error bars apart
-        x = np.array([positions[p.get("params", {}).get(key)] for p in pts]) + dodge
+        x = np.array([positions[_hashable(p.get("params", {}).get(key))] for p in pts]) + dodge
         rate = np.array([p["success_rate"] for p in pts], dtype=float)
         lo = np.clip(rate - np.array([p["wilson_low"] for p in pts], dtype=float), 0.0, None)
         hi = np.clip(np.array([p["wilson_high"] for p in pts], dtype=float) - rate, 0.0, None)
@@ -201,9 +207,9 @@ def success_png(summary: dict) -> bytes | None:
         ax.axhline(target, color=OKABE_ITO["black"], ls="--", lw=1.0, label=f"target {target:g}", zorder=3)
     required = summary.get("required") or {}
     value = required.get("value")
-    if value is not None and required.get("key") == key and value in positions:
+    if value is not None and required.get("key") == key and _hashable(value) in positions:
         ax.axvline(
-            positions[value],
+            positions[_hashable(value)],
             color=OKABE_ITO["green"],
             ls=":",
             lw=2.0,
@@ -252,12 +258,12 @@ def agreement_png(summary: dict) -> bytes | None:
             colour, marker, _ = SERIES_STYLES[i % len(SERIES_STYLES)]
             pts = sorted(
                 (p for p in pts if p.get(mean_key) is not None),
-                key=lambda p: positions[p.get("params", {}).get(key)],
+                key=lambda p: positions[_hashable(p.get("params", {}).get(key))],
             )
             if not pts:
                 continue
             dodge = 0.06 * gap * (i - (len(series) - 1) / 2)
-            x = np.array([positions[p.get("params", {}).get(key)] for p in pts]) + dodge
+            x = np.array([positions[_hashable(p.get("params", {}).get(key))] for p in pts]) + dodge
             mean = np.array([p[mean_key] for p in pts], dtype=float) * scale
             bounds = [p.get(interval_key) or [p[mean_key], p[mean_key]] for p in pts]
             lo = np.clip(mean - np.array([b[0] for b in bounds], dtype=float) * scale, 0.0, None)

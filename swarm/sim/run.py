@@ -390,6 +390,37 @@ def _read_json_lines(path: Path, whole: bool = False) -> list:
     ]
 
 
+def _check_trajectories(where: Path, arrays, n: int) -> None:
+    """The arrays `write_log` writes, as it writes them: a sample per time and robot, times rising,
+    phases and roles that exist (positions may be NaN: a robot not yet launched has none)."""
+    times = np.asarray(arrays["times_s"])
+    if times.ndim != 1:
+        raise InputError(where, "times_s", f"shape {times.shape}", "one sample time after another")
+    bad = ~np.isfinite(times)
+    bad[1:] |= ~(times[1:] > times[:-1])
+    if bad.any():
+        i = int(np.argmax(bad))
+        after = f" after {times[i - 1]:g}" if i and np.isfinite(times[i]) else ""
+        raise InputError(
+            where, f"times_s[{i}]", f"{times[i]:g}{after}", "finite sample times, each later than the last"
+        )
+    shapes = {"xy_m": (len(times), n, 2), "heading_rad": (len(times), n), "alive": (len(times), n)}
+    shapes["phase"] = (len(times), n)
+    if len(arrays["role"]):
+        shapes["role"] = (len(times), n)
+    for name, shape in shapes.items():
+        if np.shape(arrays[name]) != shape:
+            raise InputError(
+                where, name, f"shape {np.shape(arrays[name])}", f"{shape}: a value per sample time and robot"
+            )
+    for name, names in (("phase", PHASES), ("role", ROLES)):
+        if name in shapes:
+            values = np.asarray(arrays[name])
+            bad = values[(values < 0) | (values >= len(names))]
+            if len(bad):
+                raise InputError(where, name, int(bad[0]), f"an index into {name}s, 0..{len(names) - 1}")
+
+
 def read_log(out_dir: str | Path, plan: MissionPlan | None = None) -> MissionLog:
     """The log `write_log` wrote into `out_dir`, with `plan` attached (plan.json is read by
     `swarm.report.load`, which can find the map). A missing or damaged file is an `InputError`."""
@@ -410,6 +441,7 @@ def read_log(out_dir: str | Path, plan: MissionPlan | None = None) -> MissionLog
         robots = [str(r) for r in arrays["robots"]]
         n = len(robots)
         times = arrays["times_s"]
+        _check_trajectories(where, arrays, n)
         role = arrays["role"] if len(arrays["role"]) else None
         alive = arrays["alive"].astype(bool).reshape(len(times), n)
         log = MissionLog(

@@ -5,8 +5,9 @@ A run's seed is ``SeedSequence(study seed, spawn_key=(point, run))``: it depends
 run sits in the study, never on which worker ran it or when, so a study gives the same table on
 one process, on many, or on a Ray cluster, and resuming reruns exactly the missing runs.
 
-Workers keep the mission and its plan of each point they have seen (`_prepared`): planning a
-point's routes (seconds for a large swarm) happens once per worker, not once per run.
+Workers keep the mission and its plan of each point they have seen (`_prepared`, keyed by the
+point's overrides as JSON, since a value may be a list or a mapping): planning a point's routes
+(seconds for a large swarm) happens once per worker, not once per run.
 
 `run_batch` runs several runs of one point together on the batched world core
 (`swarm.sim.world`, `simulate_batch`): the same rows as `run_task` one by one (a run's result does
@@ -15,6 +16,7 @@ not depend on the batch it is in), each with its share of the batch's wall time 
 
 from __future__ import annotations
 
+import json
 import math
 import time
 from collections import Counter
@@ -25,7 +27,7 @@ from functools import lru_cache
 import numpy as np
 
 from swarm.sim.hazards import CAUSES
-from swarm.studies.table import CRITERIA, END_COUNTS, MINE_COUNTS, loss_row, param_column
+from swarm.studies.table import CRITERIA, END_COUNTS, MINE_COUNTS, loss_row
 
 #: Points whose mission and plan a worker keeps.
 PREPARED_CACHE = 16
@@ -40,6 +42,8 @@ class RunTask:
     run: int
     overrides: tuple[tuple[str, object], ...]
     seed: int
+    #: The point's columns of the table (`swarm.studies.table.param_cell`); none outside a study.
+    cells: tuple[tuple[str, object], ...] = ()
 
 
 def run_seed(study_seed: int, point: int, run: int) -> int:
@@ -48,22 +52,46 @@ def run_seed(study_seed: int, point: int, run: int) -> int:
     return int(ss.generate_state(1, dtype=np.uint64)[0])
 
 
-@lru_cache(maxsize=PREPARED_CACHE)
+class _Point:
+    """A point's overrides as the caches' key: hashed and compared by their JSON, since a value
+    may be a list or a mapping (`--set launch.points=[launch_1]`), which has no hash."""
+
+    def __init__(self, overrides: tuple[tuple[str, object], ...]) -> None:
+        self.overrides = overrides
+        self.key = json.dumps(overrides, default=str)
+
+    def __hash__(self) -> int:
+        return hash(self.key)
+
+    def __eq__(self, other: object) -> bool:
+        return isinstance(other, _Point) and self.key == other.key
+
+
 def _prepared(mission_path: str, overrides: tuple[tuple[str, object], ...]):
+    """The point's mission and plan, made once per worker."""
+    return _prepared_at(mission_path, _Point(overrides))
+
+
+def _setup(mission_path: str, overrides: tuple[tuple[str, object], ...]):
+    """The point's `MissionSetup` (what every batch of its runs shares), kept like its plan."""
+    return _setup_at(mission_path, _Point(overrides))
+
+
+@lru_cache(maxsize=PREPARED_CACHE)
+def _prepared_at(mission_path: str, point: _Point):
     from swarm.mission.load import load_mission
     from swarm.mission.plan import plan_mission
 
-    mission = load_mission(mission_path, dict(overrides), overrides_source="--sweep")
+    mission = load_mission(mission_path, dict(point.overrides), overrides_source="--sweep")
     return mission, plan_mission(mission, seed=mission.seed, workers=1)
 
 
 @lru_cache(maxsize=PREPARED_CACHE)
-def _setup(mission_path: str, overrides: tuple[tuple[str, object], ...]):
-    """The point's `MissionSetup` (what every batch of its runs shares), kept like its plan."""
+def _setup_at(mission_path: str, point: _Point):
     from swarm.sim.env import SimConfig
     from swarm.sim.setup import MissionSetup
 
-    mission, plan = _prepared(mission_path, overrides)
+    mission, plan = _prepared_at(mission_path, point)
     config = SimConfig()
     return MissionSetup(mission, plan, dt_s=config.dt_s, substep_s=config.substep_s)
 
@@ -115,7 +143,7 @@ def run_batch(tasks: list[RunTask], working: Callable[[float], None] | None = No
 def _row(task: RunTask, mission, plan, log, runtime_s: float) -> dict:
     """One run's row of the results table."""
     row: dict = {"point": task.point, "run": task.run, "seed": task.seed}
-    row.update({param_column(k): v for k, v in task.overrides})
+    row.update(task.cells)
     row["robots"] = mission.swarm.count
     row["success"] = bool(log.outcome["success"])
     criteria = log.outcome["criteria"]

@@ -28,7 +28,7 @@ from swarm.studies import backends, stats
 from swarm.studies.runner import RunTask, run_seed
 from swarm.studies.store import ResultStore
 from swarm.studies.sweep import Sweep, check_points, points
-from swarm.studies.table import schema
+from swarm.studies.table import param_cell, param_column, param_type, schema
 
 #: Interval half-widths (±) the summary says how many runs would reach.
 HALF_WIDTHS = (0.1, 0.05)
@@ -60,11 +60,13 @@ class StudySpec:
 
     def tasks(self) -> list[RunTask]:
         """Every run of the study, point by point."""
+        kinds = {s.key: param_type(s.values) for s in self.sweeps}
         out = []
         for p, overrides in enumerate(self.points()):
             items = tuple(overrides.items())
+            cells = tuple((param_column(k), param_cell(v, kinds[k])) for k, v in items)
             for r in range(self.runs):
-                out.append(RunTask(self.mission_path, p, r, items, run_seed(self.seed, p, r)))
+                out.append(RunTask(self.mission_path, p, r, items, run_seed(self.seed, p, r), cells))
         return out
 
     def as_dict(self) -> dict:
@@ -77,17 +79,7 @@ class StudySpec:
         }
 
     def table_schema(self) -> pa.Schema:
-        return schema([(s.key, _arrow_type(s)) for s in self.sweeps])
-
-
-def _arrow_type(sweep: Sweep) -> pa.DataType:
-    if sweep.is_integer:
-        return pa.int64()
-    if sweep.is_number:
-        return pa.float64()
-    if all(isinstance(v, bool) for v in sweep.values):
-        return pa.bool_()
-    return pa.string()
+        return schema([(s.key, param_type(s.values)) for s in self.sweeps])
 
 
 def run_study(

@@ -7,7 +7,8 @@ Columns, in order:
 - ``seed`` (uint64): the run's simulator seed, from ``SeedSequence(study seed, spawn_key=(point,
   run))``.
 - one column per swept key, named by its key path (``swarm.count``, ``hazards.surf.wave_height_m``),
-  float64 or int64 as the sweep's values are.
+  as the sweep's values are (`param_type`): int64 (uint64 for seeds past its range), float64,
+  bool, or text, where a list or mapping is its JSON; a null value is the column's null.
 - ``robots`` (int32): robots launched.
 - ``success`` (bool): every success criterion met.
 - ``value_<criterion>`` (float64) and ``met_<criterion>`` (bool) for each criterion the mission
@@ -34,6 +35,7 @@ Columns, in order:
 
 from __future__ import annotations
 
+import json
 from collections.abc import Sequence
 
 import pyarrow as pa
@@ -99,3 +101,28 @@ def param_column(key: str) -> str:
     """The column of a swept (or held) mission key: the key itself, or "mission.KEY" for a key
     named like one of the table's own columns (the mission's `seed` against each run's)."""
     return f"mission.{key}" if key in OWN_COLUMNS else key
+
+
+def param_type(values: Sequence[object]) -> pa.DataType:
+    """The column type of a swept key's values (a null among them is the column's null): integers
+    as int64, or uint64 when one is past int64 and none is negative (a seed from 2**63 on);
+    numbers as float64; booleans; anything else, or a mix, as text (`param_cell`)."""
+    given = [v for v in values if v is not None]
+    if given and all(isinstance(v, int) and not isinstance(v, bool) for v in given):
+        if all(-(2**63) <= v < 2**63 for v in given):
+            return pa.int64()
+        if all(0 <= v < 2**64 for v in given):
+            return pa.uint64()
+    elif given and all(isinstance(v, int | float) and not isinstance(v, bool) for v in given):
+        return pa.float64()
+    elif given and all(isinstance(v, bool) for v in given):
+        return pa.bool_()
+    return pa.string()
+
+
+def param_cell(value: object, kind: pa.DataType) -> object:
+    """A swept value as its column of type `kind` holds it: itself, or in a text column, text as
+    is and any other value (a number among text, a list of launch points) as its JSON."""
+    if value is None or not pa.types.is_string(kind) or isinstance(value, str):
+        return value
+    return json.dumps(value, default=str)

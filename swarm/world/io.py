@@ -555,8 +555,10 @@ def read_esri_ascii(
     an error unless `fill` gives the elevation to put there.
     """
     path = Path(path)
-    if fill is not None and not _is_number(fill):
-        raise InputError(path, "fill", fill, "a finite elevation (m) for NODATA cells")
+    if fill is not None and not (_is_number(fill) and abs(fill) <= MAX_ELEVATION_M):
+        raise InputError(
+            path, "fill", fill, f"an elevation (m) on Earth for NODATA cells, within +-{MAX_ELEVATION_M:g} m"
+        )
     lines = read_text(path, "ESRI ASCII grid").splitlines()
     header: dict[str, tuple[float, int]] = {}
     first_data = len(lines)
@@ -618,10 +620,20 @@ def read_esri_ascii(
         raise InputError(
             path, "(data)", f"{values.size} values", f"nrows x ncols = {nrows} x {ncols} = {nrows * ncols}"
         )
-    grid = values.reshape(nrows, ncols)[::-1].copy()  # northern row first in the file
     nodata = get("nodata_value") if "nodata_value" in header else ESRI_NODATA
-    grid[grid == nodata] = np.nan
-    missing = ~np.isfinite(grid)
+    gap = values == nodata
+    for bad, want in (
+        (~np.isfinite(values), f"a finite elevation (m), or NODATA_value {nodata:g} for a cell without data"),
+        (~gap & (np.abs(values) > MAX_ELEVATION_M), f"an elevation on Earth, within +-{MAX_ELEVATION_M:g} m"),
+    ):
+        if bad.any():
+            at = int(np.argmax(bad))
+            ends = np.cumsum([len(line.split()) for line in body])
+            line = first_data + int(np.searchsorted(ends, at, side="right")) + 1
+            raise InputError(path, f"line {line}", float(values[at]), want)
+    grid = values.reshape(nrows, ncols)[::-1].copy()  # northern row first in the file
+    grid[gap.reshape(nrows, ncols)[::-1]] = np.nan
+    missing = np.isnan(grid)
     if missing.any():
         if fill is None:
             raise InputError(

@@ -392,6 +392,26 @@ def test_points_outside_the_map_or_on_the_wrong_ground(monkeypatch):
     assert_line(error_of(raw, monkeypatch), "launch.points[0]", "launch_1", "a point on passable dry ground")
 
 
+def test_a_point_in_a_keep_out_region_is_refused_not_moved(monkeypatch):
+    """The planner once moved a beacon inside keep_out_dunes 7.5 m to its edge, without a word."""
+    inside = [110.0, 62.0]  # test_small's keep_out_dunes spans x 103-118, y 57-69 there
+    raw = small_mission()
+    raw["tasks"].append({"type": "beacon", "points": [[40.0, 62.0], inside]})
+    err = error_of(raw, monkeypatch)
+    assert_line(err, "tasks[2].points[1]", inside, "a point outside the map's keep_out regions (a beacon)")
+    assert err.expected.endswith("; it is in keep_out_dunes")
+    raw = small_mission()
+    raw["launch"] = {"platform": "beach", "points": [inside]}
+    assert_line(error_of(raw, monkeypatch), "launch.points[0]", inside, "outside the map's keep_out regions")
+
+
+@pytest.mark.parametrize("name", ["../../evil", "a/b", "a\\b", " padded", "tab\there"])
+def test_a_mission_name_that_is_no_file_name_is_refused(name, monkeypatch):
+    """The default output folder is reports/<name>-<time>: '../../evil' wrote two folders up."""
+    raw = {**small_mission(), "name": name}
+    assert_line(error_of(raw, monkeypatch), "name", name, "a name usable as a file name")
+
+
 def test_region_kind_the_map_does_not_have(monkeypatch):
     raw = small_mission()
     raw["tasks"].append({"type": "beacon", "points": ["exit"]})
@@ -406,6 +426,11 @@ def test_missing_map_file(monkeypatch):
     raw["map"] = "../maps/nowhere.yaml"
     err = error_of(raw, monkeypatch)
     assert_line(err, "map", "../maps/nowhere.yaml", "an existing map YAML (maps/nowhere.yaml does not exist")
+
+
+def test_a_map_that_is_a_folder_says_so(monkeypatch):
+    raw = {**small_mission(), "map": "../maps"}
+    assert_line(error_of(raw, monkeypatch), "map", "../maps", "a map YAML, not a folder (maps is one)")
 
 
 def test_missing_planner_and_robot_files(monkeypatch):

@@ -19,6 +19,7 @@ from swarm.mission import mission_from_dict
 from swarm.mission.plan import MissionPlan, plan_json, plan_mission, write_plan
 from swarm.planning.radio import comm_range_m, link_margin_db
 from swarm.report import build_report
+from swarm.report.load import read_plan
 from swarm.report.plan_report import NO_VERDICT, plan_data
 from swarm.report.validation_report import Validation, read_validation, validation_data, write_validation
 from swarm.robot.predict import Trajectory
@@ -162,6 +163,55 @@ def test_an_npy_header_numpy_cannot_parse_is_one_line(log_folder, tmp_path):
         read_log(tmp_path)
 
 
+def _edited_trajectories(folder: Path, tmp_path: Path, edit) -> Path:
+    for f in folder.iterdir():
+        (tmp_path / f.name).write_bytes(f.read_bytes())
+    arrays = dict(np.load(tmp_path / "trajectories.npz"))
+    edit(arrays)
+    np.savez_compressed(tmp_path / "trajectories.npz", **arrays)
+    return tmp_path
+
+
+def _time_back(a):
+    a["times_s"][10] = a["times_s"][5]
+
+
+def _no_such_role(a):
+    a["role"][3, 1] = 50
+
+
+def _short_xy(a):
+    a["xy_m"] = a["xy_m"][:-1]
+
+
+@pytest.mark.parametrize(
+    ("edit", "where", "expected"),
+    [
+        (_time_back, "times_s[10]", "finite sample times, each later than the last"),
+        (_no_such_role, "role", "an index into roles, 0..5"),
+        (_short_xy, "xy_m", "a value per sample time and robot"),
+    ],
+)
+def test_trajectories_that_swarm_could_not_have_written_are_one_line(
+    log_folder, tmp_path, edit, where, expected
+):
+    """Found by fuzzing: time running backwards and a role past the list were drawn without a
+    word, and a short array came out as numpy's reshape error without its name."""
+    with pytest.raises(InputError) as err:
+        read_log(_edited_trajectories(log_folder, tmp_path, edit))
+    assert err.value.where == where and err.value.expected.endswith(expected), str(err.value)
+    assert str(err.value).startswith(f"{tmp_path / 'trajectories.npz'}: {where}: found ")
+
+
+def test_a_position_not_yet_known_is_no_error(log_folder, tmp_path):
+    """NaN positions are how the log says a robot is still waiting to launch."""
+
+    def unknown(a):
+        a["xy_m"][3, 2, 0] = np.nan
+
+    assert read_log(_edited_trajectories(log_folder, tmp_path, unknown)).xy_m.shape[0] > 3
+
+
 def test_plan_rebuilt_from_plan_json_is_the_plan(plan, tmp_path):
     data = json.loads(plan_json(plan))
     back = MissionPlan.from_dict(data, plan.beach_map)
@@ -172,6 +222,18 @@ def test_plan_rebuilt_from_plan_json_is_the_plan(plan, tmp_path):
     source = data["source"]
     assert Path(source["map_file"]).is_file() and source["map_file"].endswith("test_small.yaml")
     assert data["criteria"]["min_detection_fraction"] == 0.5
+
+
+def test_a_plan_with_an_arrival_that_is_not_a_number_is_one_line(plan, tmp_path):
+    """Found by fuzzing: an eta_s of NaN was printed in the report as 'nan'."""
+    data = json.loads(plan_json(plan))
+    data["robots"][1]["eta_s"] = float("nan")
+    (tmp_path / "plan.json").write_text(json.dumps(data))
+    with pytest.raises(InputError) as err:
+        read_plan(tmp_path)
+    assert str(err.value) == (
+        f"{tmp_path / 'plan.json'}: robots[1].eta_s: found nan, expected a finite number in seconds"
+    )
 
 
 def test_link_margins_follow_the_link_budget(plan, mission):

@@ -29,7 +29,7 @@ from swarm.studies.runner import run_seed
 from swarm.studies.stats import k_out_of_n, wilson_interval
 from swarm.studies.study import StudySpec, run_study
 from swarm.studies.sweep import parse_sweep, parse_sweeps, points
-from swarm.studies.table import VOLATILE
+from swarm.studies.table import VOLATILE, param_cell, param_type
 
 REPO = Path(__file__).resolve().parents[2]
 #: Hazards that take nobody but random failure: a calm sea where no breaker rolls a robot over or
@@ -349,6 +349,49 @@ def test_an_integer_key_swept_with_a_whole_float_is_swept_over_integers(tiny, tm
     params = [p["params"]["swarm.count"] for p in json.loads((out / "summary.json").read_text())["points"]]
     assert all(type(c) is int for c in params)
     assert pq.read_schema(out / "results.parquet").field("swarm.count").type == pa.int64()
+
+
+def test_any_value_a_mission_takes_can_be_swept_and_held(tiny, tmp_path) -> None:
+    """Found by fuzzing: a list (`launch.points=[launch_1],[launch_2]`) crashed the workers' plan
+    cache (a list has no hash), a null beside a number the table (a text column given an int),
+    and a seed from 2**63 on the table's int64 column, each after study.json was written."""
+    out = tmp_path / "study"
+    argv = ["study", str(tiny), "--runs", "1", "--workers", "1", "--out", str(out)]
+    argv += ["--sweep", "launch.points=[launch_1],[launch_2]", "--sweep", "hazards.comms.cutoff_s=null,100"]
+    argv += ["--set", f"seed={2**63}"]
+    with contextlib.redirect_stderr(io.StringIO()), contextlib.redirect_stdout(io.StringIO()):
+        assert main(argv) == 0
+    table = pq.read_table(out / "results.parquet")
+    assert table.schema.field("launch.points").type == pa.string()
+    assert table.schema.field("hazards.comms.cutoff_s").type == pa.int64()
+    assert table.schema.field("mission.seed").type == pa.uint64()
+    rows = table.select(["launch.points", "hazards.comms.cutoff_s", "mission.seed"]).to_pylist()
+    assert [tuple(r.values()) for r in rows] == [
+        ('["launch_1"]', None, 2**63),
+        ('["launch_1"]', 100, 2**63),
+        ('["launch_2"]', None, 2**63),
+        ('["launch_2"]', 100, 2**63),
+    ]
+    points = json.loads((out / "summary.json").read_text())["points"]
+    assert [p["params"]["launch.points"] for p in points] == [["launch_1"]] * 2 + [["launch_2"]] * 2
+    assert (out / "report.html").is_file()
+
+
+def test_a_column_holds_its_sweep_s_values_as_arrow_types_them() -> None:
+    assert param_type([1, None, 3]) == pa.int64()
+    assert param_type([2**63, 0]) == pa.uint64()
+    assert param_type([-1, 2**63]) == pa.string()  # neither int64 nor uint64 holds both
+    assert param_type([1, 2.5]) == pa.float64()
+    assert param_type([True, None]) == pa.bool_()
+    assert param_type([1, "a"]) == param_type([None]) == param_type([[1], [2]]) == pa.string()
+    assert [param_cell(v, pa.string()) for v in (1, "a", None, ["x"], {"k": 0.5})] == [
+        "1",
+        "a",
+        None,
+        '["x"]',
+        '{"k": 0.5}',
+    ]
+    assert param_cell(3, pa.int64()) == 3
 
 
 def test_a_bad_batch_is_one_line_and_a_good_one_runs_in_batches(tiny, tmp_path) -> None:

@@ -300,7 +300,7 @@ def test_generate_with_the_real_generator(tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a.npz", "a.yaml", "b.npz", "b.yaml"]
     too_narrow = swarm("map", "generate", "--width-m", "31", "-o", tmp_path / "c.yaml")
     assert too_narrow.returncode == 2
-    assert len(too_narrow.stderr.strip().splitlines()) == 1 and "width_m" in too_narrow.stderr
+    assert len(too_narrow.stderr.strip().splitlines()) == 1 and "command line: --width-m" in too_narrow.stderr
     assert not (tmp_path / "c.yaml").exists() and not (tmp_path / "c.npz").exists()
 
 
@@ -324,6 +324,31 @@ def test_import_dem(tmp_path, capsys):
     np.testing.assert_allclose(m.elevation_m[:, 0], z[:, 0], atol=6e-4)  # written with 3 decimals
     assert m.terrain_classes[m.terrain[0, 0]] == "deep_water"
     assert m.terrain_classes[m.terrain[-1, 0]] == "vegetation"
+
+
+@pytest.mark.parametrize(
+    ("value", "line", "expected"),
+    [
+        ("inf", 8, "a finite elevation (m), or NODATA_value -9999 for a cell without data"),
+        ("nan", 8, "a finite elevation (m), or NODATA_value -9999 for a cell without data"),
+        ("1e9", 8, "an elevation on Earth, within +-12000 m"),
+    ],
+)
+def test_a_bad_dem_value_is_named_by_its_line(tmp_path, capsys, value, line, expected):
+    """An inf in the data was reported as a NODATA gap (and --fill offered to hide it), and 1e9 m
+    against the map YAML about to be written, not the DEM that held it."""
+    rows = ["1 2 3", "4 5 6", f"7 {value} 9"]
+    dem = tmp_path / "d.asc"
+    dem.write_text("ncols 3\nnrows 3\nxllcorner 0\nyllcorner 0\ncellsize 1\n" + "\n".join(rows) + "\n")
+    assert main(["map", "import-dem", str(dem), "-o", str(tmp_path / "d.yaml")]) == 2
+    assert (
+        capsys.readouterr().err
+        == f"swarm: error: {dem}: line {line}: found {float(value)}, expected {expected}\n"
+    )
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["d.asc"]
+    # the gap filler is held to the same range
+    assert main(["map", "import-dem", str(dem), "--fill", "1e9", "-o", str(tmp_path / "d.yaml")]) == 2
+    assert capsys.readouterr().err.startswith("swarm: error: command line: --fill: found 1000000000.0")
 
 
 # --- bad input: one line on stderr, exit 2, no traceback, nothing written -------------------------------
