@@ -414,7 +414,8 @@ def against_plan(
 ) -> str:
     """' (95% interval 96.8% to 99.2%; plan 94.8%: conservative)': the runs' t interval of a mean
     and whether the plan's expectation agrees with it (`stats.agreement`); ' (plan 94.8%)' without
-    an interval (one run, or an evaluation from before it was kept)."""
+    an interval (one run, runs that all gave the same value, or an evaluation from before it was
+    kept)."""
     if not interval:
         return f" (plan {planned:{spec}})"
     low, high = interval

@@ -134,8 +134,8 @@ def runs_for_width(point: dict, width: float = WIDTH) -> object:
 
 
 def _bounds(interval: object) -> tuple[float, float] | None:
-    """A summary's t interval of a mean as two numbers; None where there is none (one run, or a
-    summary written before intervals were kept)."""
+    """A summary's t interval of a mean as two numbers; None where there is none (one run, runs
+    that all gave the same value, or a summary written before intervals were kept)."""
     if not isinstance(interval, list | tuple) or len(interval) != 2:
         return None
     low, high = (_number(v) for v in interval)

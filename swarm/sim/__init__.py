@@ -24,6 +24,7 @@ from typing import Any
 import pettingzoo
 from pettingzoo.utils import conversions, wrappers
 
+from swarm.errors import SwarmError
 from swarm.sim.env import ACTION_MODES, COMMANDS, SimConfig, StepOutcome, SwarmEnv
 from swarm.sim.vector import SwarmVectorEnv
 
@@ -43,8 +44,13 @@ class _CheckedAEC(conversions.parallel_to_aec_wrapper):
 
     def step(self, action: Any) -> None:
         agent = self.agent_selection
-        if action is not None and not (self.terminations[agent] or self.truncations[agent]):
-            self.env.check_action(agent, action)
+        if not (self.terminations[agent] or self.truncations[agent]):
+            self.env.check_action(agent, action)  # None too: it is for an agent that is done
+        elif action is not None:  # PettingZoo's own check is a bare assert
+            raise SwarmError(
+                f"sim: action of {agent}: found {action!r}, expected None: {agent} is done (terminated or"
+                " truncated), and the AEC API steps it with None"
+            )
         super().step(action)
 
 

@@ -8,7 +8,9 @@ observations NaN for the rest of the episode. A step with one bad action applies
 - "wheels": each action is 3 numbers (left, right, jet), finite; they are clipped to [-1, 1], the
   action space's Box, as Gymnasium's `ClipAction` would.
 - "command": each action is {"command": a whole number in 0..5 (`COMMANDS`), "target": (x, y)
-  finite and on the map}; in an array row, (command, x, y).
+  finite and on the map}; in an array row, (command, x, y), the command any number in -0.5..5.5
+  taken to the nearest whole one (each command owns the unit interval around it, 2.5 is 3), so
+  every sample of the vector env's Box is an action and each command is drawn alike.
 Robots that have left the mission may be given actions (they are ignored); an id that is no robot's
 is an error. A robot still in the mission without an action stands still (wheels) or keeps its
 last command.
@@ -101,11 +103,21 @@ class Commands:
     ) -> list[tuple[int, int, np.ndarray]]:
         """(robot, command, target) of rows `idx` of (n, 3) (command, x, y) rows, all checked first."""
         picked = zip(idx.tolist(), rows[idx], strict=True)
-        return [(i, *self._checked(f"{where}row {i}", row[0], row[1:])) for i, row in picked]
+        return [(i, *self._checked(f"{where}row {i}", self.nearest(row[0]), row[1:])) for i, row in picked]
+
+    @staticmethod
+    def nearest(value: object) -> object:
+        """An array row's command: the nearest whole command to a number in -0.5..5.5 (the
+        vector env's Box), anything else as given, for `_checked` to refuse."""
+        top = len(COMMANDS) - 0.5
+        if isinstance(value, numbers.Real) and not isinstance(value, bool) and -0.5 <= value <= top:
+            return min(int(np.floor(float(value) + 0.5)), len(COMMANDS) - 1)
+        return value
 
     def _checked(self, name: object, command: object, target: object) -> tuple[int, np.ndarray]:
-        whole = isinstance(command, numbers.Integral) and not isinstance(command, bool)
-        if not whole and isinstance(command, numbers.Real) and float(command).is_integer():
+        boolean = isinstance(command, bool | np.bool_)
+        whole = isinstance(command, numbers.Integral) and not boolean
+        if not whole and not boolean and isinstance(command, numbers.Real) and float(command).is_integer():
             whole = True  # 2.0, as a float array row holds it
         try:
             xy = np.asarray(target, dtype=np.float64)

@@ -84,6 +84,7 @@ reshuffle another's draws.
 from __future__ import annotations
 
 import functools
+import math
 import os
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -178,9 +179,14 @@ class StepOutcome:
     time_up: bool  # the time limit (or max_cycles) is reached: every robot still in is truncated
 
 
+#: The longest env step: the controller steers once a step, and a robot at top speed must not
+#: run past its waypoint, the map's edge or the observation's bounds in one.
+MAX_STEP_S = 5.0
+
+
 @dataclass(frozen=True)
 class SimConfig:
-    """Simulation settings that are not part of the mission."""
+    """Simulation settings that are not part of the mission, each checked (`SwarmError` naming it)."""
 
     dt_s: float = 0.5  # one env step
     substep_s: float = 0.25  # physics substep (the skid step is stable at any step; 0.25 s is within
@@ -191,10 +197,20 @@ class SimConfig:
     neighbours: int = 4
 
     def __post_init__(self) -> None:
-        if not (self.dt_s > 0 and self.substep_s > 0 and self.comms_period_s > 0):
-            raise SwarmError("sim: dt_s, substep_s and comms_period_s must be > 0")
-        if self.patch_size < 1 or self.neighbours < 0:
-            raise SwarmError("sim: patch_size must be >= 1 and neighbours >= 0")
+        def number(value: object) -> bool:
+            return isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value)
+
+        for name, top in (("dt_s", MAX_STEP_S), ("substep_s", self.dt_s), ("comms_period_s", math.inf)):
+            value = getattr(self, name)
+            if not (number(value) and 0 < value <= top):
+                bound = f" and at most {top:g} s" if math.isfinite(top) else ""
+                raise SwarmError(f"sim: SimConfig.{name} {value!r}, expected seconds > 0{bound}")
+        if not (number(self.patch_spacing_m) and self.patch_spacing_m > 0):
+            raise SwarmError(f"sim: SimConfig.patch_spacing_m {self.patch_spacing_m!r}, expected metres > 0")
+        for name, least in (("patch_size", 1), ("neighbours", 0)):
+            value = getattr(self, name)
+            if not (isinstance(value, int | np.integer) and not isinstance(value, bool) and value >= least):
+                raise SwarmError(f"sim: SimConfig.{name} {value!r}, expected a whole number >= {least}")
 
 
 def check_seed(seed: object) -> int | None:
@@ -327,6 +343,29 @@ class SwarmEnv(ParallelEnv):
     def _observation_box(self) -> gymnasium.spaces.Box:
         return self.observation_box()
 
+    def task_observe(self) -> np.ndarray:
+        """`observe()` held to `observation_box()` (cast to its dtype): a subclass whose hook gives
+        another shape is told so here, not by a space check that fails later or never."""
+        box = self._observation_box
+        obs = np.asarray(self.observe())
+        shape = (self.n, *box.shape)
+        if obs.shape != shape:
+            raise SwarmError(
+                f"sim: {type(self).__name__}.observe() gave shape {obs.shape}, expected {shape}"
+                " (a row per robot, as observation_box() says)"
+            )
+        return obs if obs.dtype == box.dtype else obs.astype(box.dtype)
+
+    def task_rows(self, hook: str, step: StepOutcome) -> np.ndarray:
+        """`reward(step)` as float64 or `terminated(step)` as bool, one value per robot, checked."""
+        rows = np.asarray(getattr(self, hook)(step))
+        if rows.shape != (self.n,):
+            raise SwarmError(
+                f"sim: {type(self).__name__}.{hook}() gave shape {rows.shape}, expected ({self.n},):"
+                " a value per robot"
+            )
+        return rows.astype(np.float64 if hook == "reward" else bool, copy=False)
+
     def action_space(self, agent: str) -> gymnasium.spaces.Space:
         """The space of `agent`'s actions: one object every robot shares."""
         self._check_agent(agent)
@@ -358,8 +397,7 @@ class SwarmEnv(ParallelEnv):
             self.agents = [self.possible_agents[i] for i in self._agent_idx.tolist()]
 
     def reset(self, seed: int | None = None, options: dict | None = None) -> tuple[dict, dict]:
-        self.reset_arrays(seed)
-        obs = self.observe()
+        obs = self.reset_arrays(seed)
         agents, idx = self.agents, self._agent_idx
         return dict(zip(agents, obs[idx], strict=True)), dict(zip(agents, self.info(idx), strict=True))
 
@@ -368,7 +406,7 @@ class SwarmEnv(ParallelEnv):
         order (infos: `info(robots)`)."""
         self._reset_state(check_seed(seed))
         self._was_reset = True
-        return self.observe()
+        return self.task_observe()
 
     # step ---------------------------------------------------------------------------------------------
     def step(self, actions: dict[str, Any]) -> tuple[dict, dict, dict, dict, dict]:
@@ -404,10 +442,10 @@ class SwarmEnv(ParallelEnv):
         was_in[self._agent_idx] = True
         ended, time_up, score_change = self._advance(actions)
         outcome = StepOutcome(score_change, ended, time_up)
-        obs = self.observe()
+        obs = self.task_observe()
         obs[~was_in] = 0.0
-        rew = np.where(was_in, np.asarray(self.reward(outcome), np.float64), 0.0)
-        term = np.asarray(self.terminated(outcome), bool) & was_in
+        rew = np.where(was_in, self.task_rows("reward", outcome), 0.0)
+        term = self.task_rows("terminated", outcome) & was_in
         trunc = (was_in & ~term) if time_up else np.zeros(self.n, bool)
         self._finish(term, time_up)
         return obs, rew, term, trunc
@@ -436,10 +474,10 @@ class SwarmEnv(ParallelEnv):
 
     def info(self, robots: np.ndarray) -> list[dict]:
         """One info dict for each robot index in `robots`: {"phase", "role"}, and once it has left
-        the mission "end_reason" (and "lost_reason" if it was lost). Robots still working share one
-        dict per (phase, role): treat infos as read-only."""
+        the mission "end_reason" (and "lost_reason" if it was lost). Each robot's dict is its own
+        (copied from one per (phase, role)): a caller may add to it."""
         shared = self._shared_infos
-        out = [shared[k] for k in (self.phase[robots] * len(ROLES) + self.role[robots]).tolist()]
+        out = [shared[k].copy() for k in (self.phase[robots] * len(ROLES) + self.role[robots]).tolist()]
         for k in np.flatnonzero(~self.alive[robots]).tolist():  # those leaving now get their own
             out[k] = self._info(int(robots[k]))
         return out
@@ -496,11 +534,14 @@ class SwarmEnv(ParallelEnv):
                 f"sim: actions of type {type(actions).__name__}, expected a dict of agent id to action"
                 f" (or step_arrays with an ({n}, 3) array)"
             )
-        elif self.action_mode == "command":
-            for i, cmd, target in self._command_check.from_dict(actions, self.agent_index):
-                self.set_command(i, cmd, target)
-            return self.controller_commands()
         else:
+            if len(self._agent_idx) < n:  # robots that have left may be given anything: ignored
+                index, inside = self.agent_index, self.world.in_agents[self.b]
+                actions = {a: v for a, v in actions.items() if a not in index or inside[index[a]]}
+            if self.action_mode == "command":
+                for i, cmd, target in self._command_check.from_dict(actions, self.agent_index):
+                    self.set_command(i, cmd, target)
+                return self.controller_commands()
             idx, act = wheel_rows(actions, self.agent_index)
         wheels[idx] = act[:, :2] * (limits.max_wheel_speed_mps / limits.wheel_radius_m)
         jet[idx] = act[:, 2] * limits.jet_thrust_max_n
@@ -540,6 +581,7 @@ class SwarmEnv(ParallelEnv):
         """Take a robot out of the mission now, as if `cause` had struck it: for what-if
         experiments (how does the swarm cope without this relay?) and tests. It is reported
         terminated on the next step, like any loss."""
+        self._check_agent(agent)
         self.run.lose_now(self.agent_index[agent], cause)
 
     def _event(self, kind: str, robot: int | None = None, **data: Any) -> None:
@@ -552,14 +594,14 @@ class SwarmEnv(ParallelEnv):
 
     @functools.cached_property
     def _shared_infos(self) -> list[dict]:
-        """One info dict per (phase, role) for robots still working (read-only by convention)."""
+        """One info dict per (phase, role) for robots still working, which `info` copies."""
         return [{"phase": p, "role": r} for p in PHASES for r in ROLES]
 
     def _info(self, i: int) -> dict:
         """Robot i's default info (`info`)."""
         reason = self.end_reason[i]
         if reason is None:
-            return self._shared_infos[int(self.phase[i]) * len(ROLES) + int(self.role[i])]
+            return self._shared_infos[int(self.phase[i]) * len(ROLES) + int(self.role[i])].copy()
         info = {"phase": PHASES[self.phase[i]], "role": ROLES[self.role[i]], "end_reason": reason}
         if reason not in ("recovered", "expended", "time_limit"):
             info["lost_reason"] = reason

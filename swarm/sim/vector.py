@@ -87,6 +87,8 @@ class SwarmVectorEnv:
             raise SwarmError(f"sim: num_envs {num_envs!r}, expected a whole number >= 1")
         if not isinstance(normalize_obs, bool | np.bool_):
             raise SwarmError(f"sim: normalize_obs {normalize_obs!r}, expected True or False")
+        if not (isinstance(env_class, type) and issubclass(env_class, SwarmEnv)):
+            raise SwarmError(f"sim: env_class {env_class!r}, expected SwarmEnv or a subclass of it")
         num_envs = int(num_envs)
         check_seed(seed)
         opts = {"action_mode": action_mode, "config": config, "max_cycles": max_cycles}
@@ -128,12 +130,12 @@ class SwarmVectorEnv:
             self.single_observation_space = raw
         if action_mode == "wheels":
             self.single_action_space = first.action_space(first.possible_agents[0])
-        else:  # command index (a whole number), target x, y (m): one row of floats
+        else:  # command (the nearest whole number: `Commands.nearest`), target x, y (m)
             self._command_check = Commands(first.beach.bounds_m)
             x0, y0, x1, y1 = first.beach.bounds_m
             self.single_action_space = gymnasium.spaces.Box(
-                np.array([0.0, x0, y0], np.float32),
-                np.array([len(COMMANDS) - 1, x1, y1], np.float32),
+                np.array([-0.5, x0, y0], np.float32),
+                np.array([len(COMMANDS) - 0.5, x1, y1], np.float32),
                 dtype=np.float32,
             )
         self.observation_space = _batched(self.single_observation_space, (num_envs, self.n))
@@ -178,7 +180,7 @@ class SwarmVectorEnv:
         """The task's observations of runs `runs` (len(runs), n, obs_dim), raw."""
         if self._batched_observe:
             return self.observer.observe(self.world, runs)
-        return np.stack([self.envs[b].observe() for b in runs])
+        return np.stack([self.envs[b].task_observe() for b in runs])
 
     def _commands(self, actions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Wheel (B, n, 2) and jet (B, n) commands from the actions of the robots in the mission,
@@ -240,14 +242,12 @@ class SwarmVectorEnv:
         if self._batched_reward:
             rewards = np.where(was_in, change[:, None], 0.0)
         else:
-            hooks = [
-                np.asarray(env.reward(o), np.float64) for env, o in zip(self.envs, outcomes, strict=True)
-            ]
+            hooks = [env.task_rows("reward", o) for env, o in zip(self.envs, outcomes, strict=True)]
             rewards = np.where(was_in, np.stack(hooks), 0.0)
         if self._batched_terminated:
             terminated = ended & was_in
         else:
-            hooks = [np.asarray(env.terminated(o), bool) for env, o in zip(self.envs, outcomes, strict=True)]
+            hooks = [env.task_rows("terminated", o) for env, o in zip(self.envs, outcomes, strict=True)]
             terminated = np.stack(hooks) & was_in
         truncated = was_in & ~terminated & time_up[:, None]
         self.world.finish(terminated, time_up)

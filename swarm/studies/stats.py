@@ -328,16 +328,19 @@ def mean_interval(
     confidence: float = 0.95,
     within: tuple[float, float] = (-math.inf, math.inf),
 ) -> tuple[float, float] | None:
-    """The Student t interval of the mean of i.i.d. runs' values (None below two runs): the runs
-    of a study are independent draws of the same mission, and their mean is what a plan predicts.
-    Cut to `within`, the range the mean cannot leave (a share of the mines found: 0 to 1)."""
+    """The Student t interval of the mean of i.i.d. runs' values: the runs of a study are
+    independent draws of the same mission, and their mean is what a plan predicts. Cut to
+    `within`, the range the mean cannot leave (a share of the mines found: 0 to 1). None below two
+    runs, and when every run gave the same value: the sample has no spread to measure, and an
+    interval of zero width would call a plan a hair off optimistic or conservative (two runs that
+    each lost one robot against a plan of 1.03)."""
     _z(confidence)  # checks the confidence
     x = np.asarray(values, dtype=float).ravel()
     if x.size < 2:
         return None
     mean, sem = float(np.mean(x)), float(np.std(x, ddof=1)) / math.sqrt(x.size)
     if sem == 0.0:
-        return mean, mean
+        return None
     low, high = student_t.interval(confidence, x.size - 1, loc=mean, scale=sem)
     return max(float(low), within[0]), min(float(high), within[1])
 

@@ -539,3 +539,80 @@ def test_the_aec_form_refuses_a_bad_action_from_the_agent_that_gives_it(missions
     assert aec.agent_selection == first  # its turn still: it may act again
     aec.step(np.zeros(3, np.float32))
     assert aec.agent_selection != first
+
+
+def test_the_aec_form_wants_none_for_an_agent_that_is_done_and_only_then(missions: dict[str, Path]) -> None:
+    """Found by auditing the API: None for a working agent was taken, then failed at the cycle's
+    last agent and every step after; an action for a done agent was PettingZoo's bare assert."""
+    aec = swarm.sim.env(mission=missions["quiet"])
+    aec.reset(seed=0)
+    first = aec.agent_selection
+    with pytest.raises(SwarmError, match=rf"action of {first}: found None, expected 3 finite numbers"):
+        aec.step(None)
+    for _ in aec.agents:  # a whole cycle goes through
+        aec.step(np.zeros(3, np.float32))
+    aec.unwrapped.lose("robot_1")
+    while aec.agent_selection != "robot_1" or not aec.terminations["robot_1"]:
+        aec.step(np.zeros(3, np.float32))
+    with pytest.raises(
+        SwarmError, match=r"action of robot_1: found array\(.*\), expected None: robot_1 is done"
+    ):
+        aec.step(np.zeros(3, np.float32))
+    aec.step(None)
+    assert "robot_1" not in aec.agents
+
+
+def test_infos_are_each_robot_s_own(missions: dict[str, Path]) -> None:
+    """Robots of one phase and role shared one dict: a key a caller added to one robot's info showed
+    in the others', and after reset."""
+    env = swarm.sim.parallel_env(mission=missions["quiet"])
+    _, infos = env.reset(seed=0)
+    infos["robot_0"]["mine"] = 1
+    *_, infos = env.step({})
+    assert all("mine" not in i for i in infos.values())
+    waiting = [i for i in infos.values() if i["phase"] == "waiting"]  # launched one at a time
+    assert len(waiting) > 1 and len({id(i) for i in waiting}) == len(waiting)  # equal, not one dict
+    infos["robot_0"]["mine"] = 1
+    _, infos = env.reset(seed=1)
+    assert all("mine" not in i for i in infos.values())
+
+
+def test_an_action_for_a_robot_that_has_left_is_ignored_whatever_it_is(missions: dict[str, Path]) -> None:
+    env = swarm.sim.parallel_env(mission=missions["quiet"])
+    env.reset(seed=0)
+    env.lose("robot_3")
+    env.step({})
+    assert "robot_3" not in env.agents
+    env.step({"robot_3": np.full(3, np.nan), "robot_0": np.zeros(3)})  # as the module says
+    with pytest.raises(SwarmError, match="an action for 'robot_99'"):
+        env.step({"robot_3": np.full(3, np.nan), "robot_99": np.zeros(3)})
+    with pytest.raises(SwarmError, match=r"agent 'robot_99', expected one of robot_0"):
+        env.lose("robot_99")
+
+
+def test_a_command_is_a_whole_number_not_a_truth_value(missions: dict[str, Path]) -> None:
+    env = swarm.sim.parallel_env(mission=missions["quiet"], action_mode="command")
+    env.reset(seed=0)
+    for command in (True, np.bool_(True)):
+        with pytest.raises(SwarmError, match=r'expected \{"command": a whole number 0\.\.5'):
+            env.step({"robot_0": {"command": command, "target": [50.0, 50.0]}})
+
+
+@pytest.mark.parametrize(
+    ("field", "value", "says"),
+    [
+        ("dt_s", "0.5", "expected seconds > 0 and at most 5 s"),
+        ("dt_s", float("inf"), "expected seconds > 0 and at most 5 s"),
+        ("substep_s", 1.0, "expected seconds > 0 and at most 0.5 s"),
+        ("comms_period_s", 0.0, "expected seconds > 0"),
+        ("patch_spacing_m", float("nan"), "expected metres > 0"),
+        ("patch_size", 2.5, "expected a whole number >= 1"),
+        ("neighbours", True, "expected a whole number >= 0"),
+    ],
+)
+def test_sim_config_names_the_setting_it_refuses(field: str, value: object, says: str) -> None:
+    """Found by auditing the API: a string step was a TypeError from a comparison, an endless one
+    an OverflowError mid-step, a NaN patch spacing an observation patch of zeros."""
+    with pytest.raises(SwarmError) as err:
+        swarm.sim.SimConfig(**{field: value})
+    assert str(err.value) == f"sim: SimConfig.{field} {value!r}, {says}"

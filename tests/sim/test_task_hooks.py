@@ -136,3 +136,53 @@ def test_step_arrays_rejects_a_wrong_action_shape(missions: dict[str, Path]) -> 
     env.reset_arrays(seed=0)
     with pytest.raises(SwarmError, match=r"actions of shape \(6, 2\), expected \(6, 3\)"):
         env.step_arrays(np.zeros((6, 2)))
+
+
+class _FlatObservation(SwarmEnv):
+    """observe() one column short of its box."""
+
+    def observation_box(self) -> gymnasium.spaces.Box:
+        return gymnasium.spaces.Box(-1e3, 1e3, (3,), np.float32)
+
+    def observe(self) -> np.ndarray:
+        return self.robot_state[:, :2]
+
+
+class _TeamScalar(SwarmEnv):
+    """reward() a scalar, not a value per robot."""
+
+    def reward(self, step: StepOutcome) -> float:
+        return step.score_change
+
+
+class _Float64Observation(SwarmEnv):
+    def observation_box(self) -> gymnasium.spaces.Box:
+        return gymnasium.spaces.Box(-1e4, 1e4, (2,), np.float32)
+
+    def observe(self) -> np.ndarray:
+        return self.robot_state[:, :2]  # float64
+
+
+def test_a_hook_of_the_wrong_shape_is_named_in_every_form(missions: dict[str, Path]) -> None:
+    """Found by auditing the API: these came out as numpy's broadcast error from the step, or as
+    observations a space check fails on later (and the vector env took any class as env_class)."""
+    import swarm.sim
+
+    mission = missions["hazardous"]
+    for make in (
+        lambda cls: cls(mission),
+        lambda cls: swarm.sim.vector_env(mission=mission, num_envs=2, env_class=cls),
+    ):
+        with pytest.raises(
+            SwarmError, match=r"_FlatObservation.observe\(\) gave shape \(6, 2\), expected \(6, 3\)"
+        ):
+            make(_FlatObservation).reset(seed=0)
+        env = make(_TeamScalar)
+        env.reset(seed=0)
+        with pytest.raises(SwarmError, match=r"_TeamScalar.reward\(\) gave shape \(\), expected \(6,\)"):
+            env.step({} if isinstance(env, SwarmEnv) else np.zeros(env.action_space.shape, np.float32))
+        obs = make(_Float64Observation).reset(seed=0)[0]
+        rows = obs["robot_0"] if isinstance(obs, dict) else obs
+        assert rows.dtype == np.float32  # cast to the box's dtype
+    with pytest.raises(SwarmError, match="env_class <class 'dict'>, expected SwarmEnv or a subclass"):
+        swarm.sim.vector_env(mission=mission, num_envs=1, env_class=dict)

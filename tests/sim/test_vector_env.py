@@ -14,6 +14,7 @@ from tiny_missions import write_mission
 
 import swarm.sim
 from swarm.errors import SwarmError
+from swarm.sim.actions import Commands
 from swarm.sim.env import SwarmEnv
 from swarm.sim.vector import episode_seed
 
@@ -256,3 +257,18 @@ def test_a_nan_action_of_a_robot_in_the_mission_is_refused_and_changes_nothing(m
     ignored[0, 0] = np.nan
     vec.step(ignored)
     assert np.isfinite(vec.world.robot_state).all()
+
+
+def test_every_sample_of_the_command_action_space_is_an_action(missions: dict[str, Path]) -> None:
+    """Found by auditing the API: the Box sampled commands like 3.49, which step() refused. Each
+    command now owns the unit interval around it, so random samples draw each command alike."""
+    vec = swarm.sim.vector_env(mission=missions["hazardous"], num_envs=2, action_mode="command", seed=0)
+    vec.reset()
+    vec.action_space.seed(3)
+    for _ in range(5):
+        vec.step(vec.action_space.sample())
+    low, high = vec.single_action_space.low[0], vec.single_action_space.high[0]
+    assert (low, high) == (-0.5, len(swarm.sim.COMMANDS) - 0.5)
+    nearest = [Commands.nearest(v) for v in (-0.5, 0.49, 0.5, 2.5, 5.5, np.float32(3.2))]
+    assert nearest == [0, 0, 1, 3, 5, 3]
+    assert Commands.nearest(5.6) == 5.6 and Commands.nearest(True) is True  # left for the check to refuse
