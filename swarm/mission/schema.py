@@ -267,6 +267,11 @@ class LandingTask(_Task):
     robots_per_zone: int = Field(1, ge=1, description="Robots each zone needs. Default 1.")
 
 
+#: The narrowest sweep width a sensor may have (m): a mine detector's head is wider, and lanes
+#: laid that close (a search's spacing follows W) number thousands and take the planner minutes.
+MIN_SWEEP_WIDTH_M = 0.1
+
+
 class LateralRange(_Model):
     """A tabulated lateral-range curve: detection probability of an object passed at each distance
     abeam (symmetric, zero beyond the last range). Its sweep width is W = 2 ∫ p(x) dx."""
@@ -289,6 +294,12 @@ class LateralRange(_Model):
             raise _expected(
                 f"one probability per distance in range_m ({len(r)})",
                 found=f"{len(self.probability)} probabilities",
+                key="probability",
+            )
+        if self.sweep_width_m < MIN_SWEEP_WIDTH_M:
+            raise _expected(
+                f"a curve whose sweep width 2 ∫ p dx is at least {MIN_SWEEP_WIDTH_M:g} m",
+                found=f"{self.sweep_width_m:g} m",
                 key="probability",
             )
         return self
@@ -314,9 +325,9 @@ class Sensor(_Model):
     )
     sweep_width_m: float | None = Field(
         None,
-        gt=0.0,
+        ge=MIN_SWEEP_WIDTH_M,
         le=1000.0,
-        description="Effective sweep width W, metres. Give this or lateral_range.",
+        description="Effective sweep width W, metres, at least 0.1. Give this or lateral_range.",
     )
     lateral_range: LateralRange | None = Field(
         None, description="A tabulated lateral-range curve instead of sweep_width_m."

@@ -526,15 +526,17 @@ def plan_report(
         checks = [
             *data["verdict"].get("checks", []),
             {
+                # judged by the interval's lower end, as a study judges a size (`stats.required_value`):
+                # 2 runs of 2 succeeding do not show 0.9
                 "criterion": (
-                    f"P(success) in simulation ({evaluation['runs']} runs; "
-                    f"{evaluation['confidence']:.0%} Wilson interval {evaluation['wilson_low']:.2f}"
-                    f" to {evaluation['wilson_high']:.2f})"
+                    f"P(success) in simulation, the lower end of its {evaluation['confidence']:.0%} Wilson"
+                    f" interval ({evaluation['successes']} of {evaluation['runs']} runs succeeded: "
+                    f"{evaluation['wilson_low']:.2f} to {evaluation['wilson_high']:.2f})"
                 ),
-                "value": evaluation["success_rate"],
+                "value": evaluation["wilson_low"],
                 "target": evaluation["target"],
                 "unit": "fraction",
-                "met": evaluation["success_rate"] >= evaluation["target"],
+                "met": evaluation["wilson_low"] >= evaluation["target"],
             },
         ]
         data["verdict"] = _verdict(checks)

@@ -670,8 +670,8 @@ class World:
         rows = None if every else np.repeat(going, n)
         on_map = self.flat("on_map")
 
-        def pick(a: np.ndarray) -> np.ndarray:
-            a = a.reshape(self.B * n, *a.shape[2:]) if a.ndim >= 2 and a.shape[0] == self.B else a
+        def pick(a: np.ndarray) -> np.ndarray:  # (B, n, ...) or already flat (B * n, ...)
+            a = a.reshape(self.B * n, *a.shape[2:]) if a.shape[:2] == (self.B, n) else a
             return a if every else a[rows]
 
         inp = hazards.HazardInputs(

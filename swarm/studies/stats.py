@@ -31,7 +31,7 @@ from dataclasses import dataclass
 from numbers import Real
 
 import numpy as np
-from scipy.stats import binom, norm
+from scipy.stats import binom, chi2, norm
 from scipy.stats import t as student_t
 
 from swarm.errors import SwarmError
@@ -40,6 +40,7 @@ __all__ = [
     "RequiredAnswer",
     "StatsInputError",
     "agreement",
+    "count_mean_interval",
     "distribution",
     "k_out_of_n",
     "mean_interval",
@@ -343,6 +344,26 @@ def mean_interval(
         return None
     low, high = student_t.interval(confidence, x.size - 1, loc=mean, scale=sem)
     return max(float(low), within[0]), min(float(high), within[1])
+
+
+def count_mean_interval(
+    counts: Sequence[int],
+    confidence: float = 0.95,
+    within: tuple[float, float] = (0.0, math.inf),
+) -> tuple[float, float] | None:
+    """The interval of the mean of runs' counts (robots lost a run): `mean_interval`, or where
+    every run counted the same, Garwood's exact Poisson interval of the mean (the total L over n
+    runs: chi2(a/2, 2L) / 2n to chi2(1 - a/2, 2L + 2) / 2n; Garwood, Biometrika 27, 1936), which
+    still tells three runs that each lost 5 robots from a plan of 0.77, and two that each lost 1
+    from a plan of 1.03 not. Cut to `within` (at most the robots launched). None below two runs."""
+    x = np.asarray(counts, dtype=float).ravel()
+    interval = mean_interval(x, confidence, within)
+    if interval is not None or x.size < 2:
+        return interval
+    total, alpha = float(x.sum()), 1.0 - confidence
+    low = float(chi2.ppf(alpha / 2, 2 * total)) / (2 * x.size) if total > 0 else 0.0
+    high = float(chi2.ppf(1 - alpha / 2, 2 * total + 2)) / (2 * x.size)
+    return max(low, within[0]), min(high, within[1])
 
 
 def agreement(

@@ -202,6 +202,7 @@ def summarize(spec: StudySpec, table: pa.Table) -> dict:
     success = np.asarray(cols["success"], dtype=bool)
     completed = np.array([np.nan if v is None else v for v in cols["completed_s"]], dtype=np.float64)
     losses = cols["losses"]
+    robots = cols.get("robots") or [0] * len(point_of)
     planned = cols.get("planned_lost") or [None] * len(point_of)  # absent from older tables
     found = cols.get("value_detection") or [None] * len(point_of)
     planned_found = cols.get("planned_detection") or [None] * len(point_of)
@@ -226,8 +227,8 @@ def summarize(spec: StudySpec, table: pa.Table) -> dict:
                 "losses_by_cause": by_cause,
                 "losses_by_phase": by_phase,
                 "lost_mean": float(np.mean([len(losses[i]) for i in mine])) if n else 0.0,
-                "lost_interval": _interval_of(
-                    [len(losses[i]) for i in mine], spec.confidence, (0.0, math.inf)
+                "lost_interval": _count_interval(
+                    [len(losses[i]) for i in mine], spec.confidence, max((robots[i] for i in mine), default=0)
                 ),
                 "planned_lost": next((planned[i] for i in mine if planned[i] is not None), None),
                 # the mines found a run against the plan's expectation after its losses
@@ -275,6 +276,12 @@ def _interval_of(values: list, confidence: float, within: tuple[float, float]) -
     """The t interval of the mean of the values that are there (`stats.mean_interval`, cut to
     `within`), as JSON."""
     interval = stats.mean_interval([v for v in values if v is not None], confidence, within)
+    return None if interval is None else list(interval)
+
+
+def _count_interval(counts: list[int], confidence: float, robots: int) -> list[float] | None:
+    """`stats.count_mean_interval` of robots lost a run, at most the robots launched, as JSON."""
+    interval = stats.count_mean_interval(counts, confidence, (0.0, float(robots) if robots else math.inf))
     return None if interval is None else list(interval)
 
 

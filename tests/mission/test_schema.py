@@ -241,7 +241,7 @@ def test_json_schema_is_well_formed():
     assert sorted(tasks["discriminator"]["mapping"]) == sorted(TASK_TYPES)
     assert len(tasks["oneOf"]) == len(TASK_TYPES)
     width = defs["Sensor"]["properties"]["sweep_width_m"]
-    assert {"type": "number", "exclusiveMinimum": 0.0, "maximum": 1000.0} in width["anyOf"]
+    assert {"type": "number", "minimum": 0.1, "maximum": 1000.0} in width["anyOf"]
 
 
 @pytest.mark.parametrize("path", MISSIONS, ids=lambda p: p.stem)
@@ -307,9 +307,9 @@ def test_negative_number(monkeypatch):
     raw = small_mission()
     raw["tasks"][1]["sensor"]["sweep_width_m"] = -2.0
     err = error_of(raw, monkeypatch)
-    assert_line(err, "tasks[1].sensor.sweep_width_m", -2.0, "a number in metres > 0")
+    assert_line(err, "tasks[1].sensor.sweep_width_m", -2.0, "a number in metres >= 0.1")
     assert str(err) == (
-        "missions/x.yaml: tasks[1].sensor.sweep_width_m: found -2.0, expected a number in metres > 0"
+        "missions/x.yaml: tasks[1].sensor.sweep_width_m: found -2.0, expected a number in metres >= 0.1"
     )
 
 
@@ -617,3 +617,15 @@ def test_a_beach_launch_s_beach_operations_run_from_0_to_their_own_limit() -> No
     log = simulate(recon, seed=3)
     assert 2400 - 0.5 <= log.times_s[-1] <= 2400 + 0.5
     assert all(x["t_s"] <= 2400 + 0.5 for x in log.losses)
+
+
+def test_a_sweep_narrower_than_a_detector_is_refused(monkeypatch):
+    """Found by auditing: sweep_width_m 0.001 laid lanes a millimetre apart and planned for ever."""
+    raw = small_mission()
+    raw["tasks"][1]["sensor"] = {"sweep_width_m": 0.001}
+    assert_line(
+        error_of(raw, monkeypatch), "tasks[1].sensor.sweep_width_m", 0.001, "a number in metres >= 0.1"
+    )
+    raw["tasks"][1]["sensor"] = {"lateral_range": {"range_m": [0.0, 0.02], "probability": [1.0, 0.0]}}
+    err = error_of(raw, monkeypatch)  # W = 2 * 0.02 / 2 = 0.02 m
+    assert err.where == "tasks[1].sensor.lateral_range.probability" and err.found == "0.02 m"

@@ -486,15 +486,17 @@ def test_the_points_say_whether_the_plan_agrees_with_its_runs() -> None:
     points = summarize(spec, table)["points"]
     # losses 2, 3, 4, 3: mean 3, s.d. sqrt(2/3), half-width 3.1824 * 0.8165 / 2 = 1.299
     assert points[0]["lost_interval"] == pytest.approx([3 - 1.2992, 3 + 1.2992], abs=1e-4)
-    assert points[1]["lost_interval"] is None  # every run alike: no spread, no interval, no verdict
+    # every run lost 5: no spread for a t interval; Garwood's exact Poisson limits of a count of 20
+    # (12.217 to 30.888, a Poisson table) over 4 runs
+    assert points[1]["lost_interval"] == pytest.approx([12.217 / 4, 30.888 / 4], abs=1e-3)
     # detection 0.80, 0.90, 0.85, 0.85: s.d. 0.040825, half-width 3.1824 * 0.020412 = 0.06496
     assert points[0]["detection_interval"] == pytest.approx([0.85 - 0.06496, 0.85 + 0.06496], abs=1e-5)
     # 0.90, 1.00, 0.95, 0.95: the same spread about 0.95, cut at 100%; the cell shows the wider side
     assert points[1]["detection_interval"] == pytest.approx([0.95 - 0.06496, 1.0], abs=1e-5)
     rows = study_rows({"points": points})
-    assert column(rows, "mean lost per run") == ["3.00 ± 1.30", "5.00"]
+    assert column(rows, "mean lost per run") == ["3.00 ± 1.30", "5.00 ± 2.72"]
     # the plan expects 1.5 lost where the runs lose 1.7 to 4.3: it promises too few
-    assert column(rows, "plan's expected losses") == ["1.50 (optimistic)", "5.00"]
+    assert column(rows, "plan's expected losses") == ["1.50 (optimistic)", "5.00 (agrees)"]
     assert column(rows, "mean detection") == ["85.0% ± 6.5", "95.0% ± 6.5"]
     assert column(rows, "plan's detection") == ["95.0% (optimistic)", "70.0% (conservative)"]
     # a summary from before the intervals: the bare numbers

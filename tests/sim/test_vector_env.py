@@ -272,3 +272,25 @@ def test_every_sample_of_the_command_action_space_is_an_action(missions: dict[st
     nearest = [Commands.nearest(v) for v in (-0.5, 0.49, 0.5, 2.5, 5.5, np.float32(3.2))]
     assert nearest == [0, 0, 1, 3, 5, 3]
     assert Commands.nearest(5.6) == 5.6 and Commands.nearest(True) is True  # left for the check to refuse
+
+
+def test_a_swarm_of_one_robot_runs_alone_and_batched(tmp_path: Path) -> None:
+    """Found by auditing sweeps from one robot up: the hazards' inputs read a run's (B, 1) arrays as
+    already flat, and every simulation of one robot was a reshape error."""
+    mission = write_mission(
+        tmp_path,
+        "one",
+        swarm={"count": 1},
+        tasks=[{"type": "landing", "zones": ["landing_a"], "robots_per_zone": 1}],
+    )
+    alone = swarm.sim.parallel_env(mission=mission)
+    alone.reset(seed=4)
+    vec = swarm.sim.vector_env(mission=mission, num_envs=3, seed=4)
+    vec.reset()
+    rng = np.random.default_rng(0)
+    for _ in range(40):
+        action = rng.uniform(-1, 1, (3, 1, 3)).astype(np.float32)
+        vec.step(action)
+        if alone.agents:
+            alone.step({"robot_0": action[0, 0]})
+    assert np.isfinite(vec.world.robot_state).all() and vec.world.robot_state.shape == (3, 1, 6)

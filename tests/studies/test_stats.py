@@ -14,6 +14,7 @@ from swarm.errors import SwarmError
 from swarm.studies.stats import (
     StatsInputError,
     agreement,
+    count_mean_interval,
     distribution,
     k_out_of_n,
     mean_interval,
@@ -329,6 +330,17 @@ def test_the_mean_interval_is_student_s_t_interval() -> None:
     assert low == pytest.approx(0.96667 - 0.14342, abs=1e-4) and high == 1.0
     with pytest.raises(StatsInputError, match="confidence"):
         mean_interval([1, 2], 1.0)
+
+
+def test_counts_that_are_all_alike_get_garwood_s_poisson_interval() -> None:
+    """Exact Poisson 95% limits from a table (Garwood 1936): 0 -> 0 to 3.689, 2 -> 0.2422 to
+    7.2247, 15 -> 8.3954 to 24.740; the mean of n runs is the total's limits over n."""
+    assert count_mean_interval([0] * 10) == pytest.approx((0.0, 3.689 / 10), abs=1e-4)
+    assert count_mean_interval([1, 1]) == pytest.approx((0.2422 / 2, 7.2247 / 2), abs=1e-4)
+    assert count_mean_interval([5, 5, 5]) == pytest.approx((8.3954 / 3, 24.740 / 3), abs=1e-4)
+    assert count_mean_interval([5, 5, 5], within=(0.0, 6.0))[1] == 6.0  # no more than were launched
+    assert count_mean_interval([1, 2, 3, 4, 5]) == mean_interval([1, 2, 3, 4, 5])  # spread: the t interval
+    assert count_mean_interval([3]) is None
 
 
 def test_the_mean_interval_covers_the_true_mean_at_its_confidence() -> None:
