@@ -125,6 +125,8 @@ def _relay(d: dict) -> dict | None:
         "comm_range_m": r["comm_range_m"],
         "redundancy": r["redundancy"],
         "relays": len(positions),
+        # robots the plan puts on a relay position: fewer than positions when the swarm is too small
+        "staffed": sum(1 for robot in d.get("robots", []) if robot.get("role") == "relay"),
         "max_hop_m": r.get("max_hop_m"),
         "min_margin_db": None if r.get("min_margin_db") is None else round(float(r["min_margin_db"]), 1),
         "fixed_height_m": r.get("fixed_height_m"),
@@ -151,6 +153,16 @@ def _checks(search: list[dict], relay: dict | None, losses: dict | None, criteri
                     "met": value >= target - 1e-12,
                 }
             )
+    if relay is not None and relay["relays"]:
+        out.append(
+            {
+                "criterion": f"robots on the relay's positions ({relay['task']})",
+                "value": float(relay["staffed"]),
+                "target": float(relay["relays"]),
+                "unit": "robots",
+                "met": relay["staffed"] >= relay["relays"],
+            }
+        )
     if relay is not None and relay["min_margin_db"] is not None:
         out.append(
             {

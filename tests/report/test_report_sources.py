@@ -276,6 +276,18 @@ def test_plan_verdicts(plan):
     assert plan_data(negative)["verdict"]["status"] == "not met"
     bare = {**data, "criteria": {}, "relay": None}
     assert plan_data(bare)["verdict"] == {"text": NO_VERDICT, "status": "none"}
+    # a relay of more positions than the swarm has robots for: found by auditing relay.yaml at one
+    # robot, whose plan of 6 positions said PLAN MEETS on its link margin alone
+    positions = len(data["relay"]["positions_m"])
+    assert positions and sum(r["role"] == "relay" for r in data["robots"]) == positions
+    short_handed = json.loads(json.dumps(low))
+    next(r for r in short_handed["robots"] if r["role"] == "relay")["role"] = "spare"
+    verdict = plan_data(short_handed)["verdict"]
+    assert verdict["status"] == "not met"
+    assert (
+        f"robots on the relay's positions (relay_1) {positions - 1:.1f} robots < {positions:.1f}"
+        in verdict["text"]
+    )
 
 
 def test_a_plan_whose_map_has_gone_keeps_its_tables(plan, tmp_path):
