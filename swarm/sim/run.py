@@ -404,10 +404,10 @@ def _check_trajectories(where: Path, arrays, n: int) -> None:
         raise InputError(
             where, f"times_s[{i}]", f"{times[i]:g}{after}", "finite sample times, each later than the last"
         )
-    shapes = {"xy_m": (len(times), n, 2), "heading_rad": (len(times), n), "alive": (len(times), n)}
-    shapes["phase"] = (len(times), n)
+    per_robot = (len(times), n)
+    shapes = {"xy_m": (*per_robot, 2), "heading_rad": per_robot, "alive": per_robot, "phase": per_robot}
     if len(arrays["role"]):
-        shapes["role"] = (len(times), n)
+        shapes["role"] = per_robot
     for name, shape in shapes.items():
         if np.shape(arrays[name]) != shape:
             raise InputError(
