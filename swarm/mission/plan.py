@@ -137,6 +137,15 @@ class RelayPlanOut:
     fixed_height_m: float | None = None  # antenna height of the source and sinks
 
     @property
+    def n_terminals(self) -> int:
+        return 1 + len(self.sinks_m.reshape(-1, 2))
+
+    def relay_hops_m(self) -> np.ndarray:
+        """The lengths of the links with a relay robot at one end (not the terminals' direct links)."""
+        relayed = self.edges.max(axis=1) >= self.n_terminals if len(self.edges) else []
+        return self.hop_lengths_m[relayed]
+
+    @property
     def nodes_m(self) -> np.ndarray:
         """Every node `edges` index: the source, the sinks, then the relay robots."""
         return np.vstack(
@@ -148,7 +157,7 @@ class RelayPlanOut:
         simulator uses: a robot's mast, or the source's for a source or sink end. None without a radio."""
         if self.radio is None or not len(self.edges):
             return None if self.radio is None else np.empty(0)
-        fixed = 1 + len(self.sinks_m.reshape(-1, 2))
+        fixed = self.n_terminals
         high = self.radio.tx_height_m if self.fixed_height_m is None else self.fixed_height_m
         out = []
         for (a, b), d in zip(self.edges, self.hop_lengths_m, strict=True):
@@ -328,7 +337,7 @@ class MissionPlan:
                 "redundancy": r.redundancy,
                 "positions_m": r.positions_m.tolist(),
                 "edges": r.edges.tolist(),
-                "max_hop_m": float(r.hop_lengths_m.max()) if len(r.hop_lengths_m) else 0.0,
+                "max_hop_m": float(r.relay_hops_m().max(initial=0.0)),
             }
             margins = r.link_margins_db()
             if margins is not None:
@@ -537,12 +546,15 @@ def _slots(
                 raise SwarmError(f"plan: {label}: one relay task per mission is supported")
             radio = radio_params(task.radio)
             range_m = comm_range_m(radio)
+            mast = task.radio.source_antenna_height_m
             source = np.array(place_xy(bm, task.source))
             sinks = np.array([place_xy(bm, s) for s in task.sinks])
             rp = plan_relays(
                 source,
                 sinks,
                 range_m=range_m,
+                # the source and sinks link each other on their own masts, as in the simulator
+                terminal_range_m=comm_range_m(dataclasses.replace(radio, tx_height_m=mast, rx_height_m=mast)),
                 grid=standable_grid(bm, mission.terrain_library),
                 redundancy=task.redundancy,
             )
@@ -556,7 +568,7 @@ def _slots(
                 rp.edges,
                 rp.hop_lengths_m,
                 radio=radio,
-                fixed_height_m=task.radio.source_antenna_height_m,
+                fixed_height_m=mast,
             )
             for p in rp.positions_m:
                 slots.append(_Slot("relay", label, free.snap(p)))

@@ -448,7 +448,8 @@ class Radio(_Model):
         2.0,
         gt=0.0,
         le=100.0,
-        description="Antenna height of the offshore source (craft or buoy), metres. Default 2.",
+        description="Antenna height of the offshore source (craft or buoy) and of the sinks, metres: "
+        "they link each other directly when their masts reach. Default 2.",
     )
     rx_sensitivity_dbm: float = Field(-95.0, le=0.0, description="Receiver sensitivity, dBm. Default -95.")
     fade_margin_db: float = Field(10.0, ge=0.0, description="Fade margin kept in reserve, dB. Default 10.")

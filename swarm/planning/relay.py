@@ -140,7 +140,8 @@ class RelayPlan:
     """Relay positions and the links they make.
 
     Nodes are numbered ``[source, sinks..., relays...]``; `edges` are planned radio links between
-    node indices, each at most `range_m` long.
+    node indices, each at most `range_m` long where a relay is at one end (two terminals in reach
+    of each other link directly).
     """
 
     terminals_m: np.ndarray  # (1 + n_sinks, 2): the source, then the sinks
@@ -166,8 +167,10 @@ class RelayPlan:
 
     @property
     def min_slack_m(self) -> float:
-        """Range left on the longest hop."""
-        return float(self.range_m - self.hop_lengths_m.max()) if len(self.hop_lengths_m) else self.range_m
+        """Range left on the longest hop with a relay at one end."""
+        relayed = self.edges.max(axis=1) >= self.n_terminals if len(self.edges) else []
+        hops = self.hop_lengths_m[relayed]
+        return float(self.range_m - hops.max()) if len(hops) else self.range_m
 
 
 def terminals_connected(
@@ -539,6 +542,7 @@ def plan_relays(
     *,
     range_m: float | None = None,
     radio: RadioParams | None = None,
+    terminal_range_m: float | None = None,
     grid: StandGrid | None = None,
     redundancy: int = 1,
     separation_m: float = RELAY_SEPARATION_M,
@@ -548,8 +552,11 @@ def plan_relays(
     """Place relays linking `source_m` to every sink, each hop within range.
 
     The range is `range_m`, else `comm_range_m(radio)`; with a radio the plan reports its worst
-    link margin. With a `grid` (`standable_grid(beach)`) relays stand only on standable cell
-    centres; without one, anywhere. `redundancy` 1: a tree; 2: any single relay may be lost.
+    relay link's margin. `terminal_range_m` (default: the range) is the budget between two
+    terminals, whose masts may stand higher than a robot's: terminals that close it link directly,
+    with no relay between them and no second chain (no robot's loss can cut that link). With a
+    `grid` (`standable_grid(beach)`) relays stand only on standable cell centres; without one,
+    anywhere. `redundancy` 1: a tree; 2: any single relay may be lost.
     Relays keep `separation_m` from each other; a chain may use up to `max_extra_relays` more than
     its straight-line minimum before a detour is searched; `hubs=False` skips the Steiner hubs.
     Raises `RelayError` (a `SwarmError`) naming the link and the hop that cannot be closed.
@@ -560,6 +567,10 @@ def plan_relays(
         range_m = comm_range_m(radio)
     if not (math.isfinite(range_m) and range_m > 0):
         raise SwarmError(f"relay: range_m must be a positive number, found {range_m!r}")
+    if terminal_range_m is None:
+        terminal_range_m = range_m
+    if not (math.isfinite(terminal_range_m) and terminal_range_m > 0):
+        raise SwarmError(f"relay: terminal_range_m must be a positive number, found {terminal_range_m!r}")
     if redundancy not in (1, 2):
         raise SwarmError(f"relay: redundancy must be 1 or 2, found {redundancy!r}")
     source = np.asarray(source_m, dtype=np.float64).reshape(2)
@@ -567,11 +578,15 @@ def plan_relays(
     if not len(sinks):
         raise SwarmError("relay: need at least one sink")
     terminals = np.vstack([source, sinks])
+    n_t = len(terminals)
     names = ["source", *(f"sink {i}" for i in range(len(sinks)))]
     ground = _Ground(grid, float(range_m), float(separation_m))
+    # terminal pairs in reach of each other need no relay
+    direct_t = cdist(terminals, terminals) <= terminal_range_m
+    np.fill_diagonal(direct_t, False)
 
     hub_pts = np.empty((0, 2))
-    if redundancy == 1 and hubs and len(terminals) >= 3:
+    if redundancy == 1 and hubs and n_t >= 3 and not direct_t.any():
         hub_pts = _steiner_hubs(terminals, ground, float(range_m))
     for h in hub_pts:
         ground.placed.append(h)
@@ -589,7 +604,13 @@ def plan_relays(
         edges.extend(itertools.pairwise(ids))
 
     base = np.asarray(nodes)
+    direct = np.zeros((len(base), len(base)), dtype=bool)
+    direct[:n_t, :n_t] = direct_t
+    # (with direct pairs there are no hubs, and every other pair is longer: the tree takes them first)
     for i, j in _mst_edges(base):
+        if direct[i, j]:
+            edges.append((i, j))
+            continue
         a, b = base[i], base[j]
         first = _chain(a, b, ground, (names[i], names[j]), max_extra=max_extra_relays)
         add_chain(i, j, first)
@@ -600,9 +621,9 @@ def plan_relays(
             add_chain(i, j, second)
 
     all_nodes = np.asarray(nodes)
-    n_t = len(terminals)
     e = np.asarray(edges, dtype=np.intp).reshape(-1, 2)
     hops = np.hypot(*(all_nodes[e[:, 0]] - all_nodes[e[:, 1]]).T) if len(e) else np.empty(0)
+    by_robot = e.max(axis=1) >= n_t if len(e) else np.empty(0, dtype=bool)  # not terminal-terminal
     plan = RelayPlan(
         terminals_m=terminals,
         positions_m=all_nodes[n_t:].reshape(-1, 2),
@@ -611,13 +632,18 @@ def plan_relays(
         range_m=float(range_m),
         redundancy=redundancy,
         min_margin_db=(
-            float(np.min(link_margin_db(hops, radio))) if radio is not None and len(hops) else None
+            float(np.min(link_margin_db(hops[by_robot], radio)))
+            if radio is not None and by_robot.any()
+            else None
         ),
         hubs=tuple(range(n_t, n_t + len(hub_pts))),
     )
     # the plan's own guarantees, checked
-    if len(hops) and hops.max() > range_m * (1 + 1e-9):
-        raise AssertionError(f"relay: a hop of {hops.max():.3f} m exceeds the range {range_m:.3f} m")
+    if by_robot.any() and hops[by_robot].max() > range_m * (1 + 1e-9):
+        longest = hops[by_robot].max()
+        raise AssertionError(f"relay: a hop of {longest:.3f} m exceeds the range {range_m:.3f} m")
+    if (~by_robot).any() and hops[~by_robot].max() > terminal_range_m * (1 + 1e-9):
+        raise AssertionError("relay: a direct terminal link exceeds the terminal range")
     if not terminals_connected(len(all_nodes), e, n_t):
         raise AssertionError("relay: the plan does not connect every terminal")
     if redundancy == 2 and (cuts := single_loss_cuts(plan)):

@@ -130,6 +130,8 @@ def _relay(d: dict) -> dict | None:
         "max_hop_m": r.get("max_hop_m"),
         "min_margin_db": None if r.get("min_margin_db") is None else round(float(r["min_margin_db"]), 1),
         "fixed_height_m": r.get("fixed_height_m"),
+        # source and sinks in reach of each other on their own masts: linked with no relay
+        "direct_links": sum(1 for a, b in r.get("edges", []) if max(a, b) < 1 + len(sinks)),
         "links": links,
     }
 
@@ -261,7 +263,12 @@ def summary_table(data: dict) -> list[list[str]]:
             [
                 "relays",
                 f"{r['relays']} (range {r['comm_range_m']:.0f} m, longest hop "
-                f"{_num(r['max_hop_m'], '.0f')} m, least link margin {_num(r['min_margin_db'], '.1f')} dB)",
+                f"{_num(r['max_hop_m'], '.0f')} m, least link margin {_num(r['min_margin_db'], '.1f')} dB)"
+                + (
+                    f"; {r['direct_links']} direct link(s) between the source's and sinks' masts"
+                    if r["direct_links"]
+                    else ""
+                ),
             ]
         )
     for sp in data["search"]:

@@ -21,8 +21,9 @@ REPO = Path(__file__).resolve().parents[2]
 LANDING = REPO / "missions" / "landing.yaml"
 
 
-def _small_mixed(count: int = 9):
-    """landing + relay (short radio range: relays needed) + beacon + search, on test_small."""
+def _small_mixed(count: int = 9, mast_m: float = 0.5):
+    """landing + relay (short radio range: relays needed, with the source and sink on `mast_m`
+    masts) + beacon + search, on test_small."""
     raw = {
         "name": "small_mixed",
         "map": "../maps/test_small.yaml",
@@ -35,7 +36,7 @@ def _small_mixed(count: int = 9):
                 "type": "relay",
                 "source": "relay_source",
                 "sinks": ["relay_sink"],
-                "radio": {"tx_power_dbm": -10.0},
+                "radio": {"tx_power_dbm": -10.0, "source_antenna_height_m": mast_m},
             },
             {"type": "beacon", "points": [[60.0, 50.0]]},
             {
@@ -144,6 +145,27 @@ def test_relay_hops_within_range(mixed_plan):
         assert np.hypot(*(nodes[a] - nodes[b])) <= relay["comm_range_m"] + 1e-6
     relays = [r for r in data["robots"] if r["role"] == "relay"]
     assert len(relays) == len(relay["positions_m"])
+
+
+def test_relay_terminals_whose_masts_reach_each_other_need_no_relays():
+    """The simulator links the source and a sink on their own masts; so does the plan: with masts
+    high enough the link is direct, no robot stands on it, and its margin is the masts' budget."""
+    low = plan_mission(_small_mixed(), seed=1, workers=1)
+    assert low.relay is not None and len(low.relay.positions_m)
+    (d,) = np.hypot(*(low.relay.source_m - low.relay.sinks_m).T)
+    radio = low.relay.radio
+    # 3 m masts put the two-ray crossover (4 pi h^2 / lambda) beyond d: the link is in free space
+    mast = 3.0
+    assert d < 4 * math.pi * mast**2 / radio.wavelength_m
+    friis = 20 * math.log10(4 * math.pi * d / radio.wavelength_m)  # Rappaport eq. 4.5, in dB
+    budget = radio.tx_power_dbm + radio.tx_gain_dbi + radio.rx_gain_dbi - radio.required_dbm
+    assert budget - friis > 0
+    high = plan_mission(_small_mixed(mast_m=mast), seed=1, workers=1)
+    out = json.loads(plan_json(high))
+    assert out["relay"]["positions_m"] == [] and out["relay"]["edges"] == [[0, 1]]
+    assert not [r for r in out["robots"] if r["role"] == "relay"]
+    # (plan.json keeps 3 decimals)
+    assert out["relay"]["link_margins_db"] == pytest.approx([budget - friis], abs=1e-3)
 
 
 def test_search_tracks_shared(mixed_plan):

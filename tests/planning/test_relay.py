@@ -148,7 +148,8 @@ def check_plan(plan, grid: StandGrid | None = None) -> None:
     nodes = plan.nodes_m
     lengths = np.hypot(*(nodes[plan.edges[:, 0]] - nodes[plan.edges[:, 1]]).T)
     assert np.allclose(lengths, plan.hop_lengths_m)
-    assert (lengths <= plan.range_m + 1e-9).all()
+    relayed = plan.edges.max(axis=1) >= plan.n_terminals
+    assert (lengths[relayed] <= plan.range_m + 1e-9).all()
     assert components_ok(plan)
     if plan.redundancy == 2:
         for relay in range(plan.n_terminals, len(nodes)):
@@ -179,6 +180,23 @@ def test_in_range_needs_no_relays() -> None:
     plan = plan_relays((0.0, 0.0), [(100.0, 0.0), (0.0, 140.0)], range_m=150.0, redundancy=2)
     assert plan.n_relays == 0
     check_plan(plan)
+
+
+@pytest.mark.parametrize("redundancy", [1, 2])
+def test_terminals_on_masts_in_reach_link_directly(redundancy: int) -> None:
+    # sink 0 is 300 m from the source, inside the masts' 350 m; sink 1, 380 m out, is not: only
+    # its link takes relays (3 a chain, hops of 95 m), and no robot's loss can cut the direct one
+    sinks = [(300.0, 0.0), (0.0, 380.0)]
+    plan = plan_relays((0.0, 0.0), sinks, range_m=100.0, terminal_range_m=350.0, redundancy=redundancy)
+    check_plan(plan)
+    assert [0, 1] in plan.edges.tolist()
+    assert plan.n_relays == 3 * redundancy
+    assert not single_loss_cuts(plan) or redundancy == 1
+    # the same sinks with masts no higher than a robot's: both links take relays
+    low = plan_relays((0.0, 0.0), sinks, range_m=100.0, redundancy=redundancy)
+    assert [0, 1] not in low.edges.tolist() and low.n_relays > plan.n_relays
+    with pytest.raises(SwarmError, match=r"terminal_range_m must be a positive number, found 0\.0"):
+        plan_relays((0.0, 0.0), sinks, range_m=100.0, terminal_range_m=0.0)
 
 
 def test_many_sinks_all_connected_every_hop_in_range() -> None:

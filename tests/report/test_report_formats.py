@@ -54,7 +54,7 @@ MISSION = {
             "type": "relay",
             "source": "relay_source",
             "sinks": ["relay_sink"],
-            "radio": {"tx_power_dbm": -10.0},
+            "radio": {"tx_power_dbm": -10.0, "source_antenna_height_m": 0.5},  # relays needed
         },
         {"type": "search", "area": "search_beach", "sensor": {"sweep_width_m": 6.0}, "robots": 2},
     ],

@@ -53,7 +53,7 @@ def _mission(**success: float):
                 "type": "relay",
                 "source": "relay_source",
                 "sinks": ["relay_sink"],
-                "radio": {"tx_power_dbm": -10.0, "source_antenna_height_m": 2.5},
+                "radio": {"tx_power_dbm": -10.0, "source_antenna_height_m": 0.7},  # 66 m mast to mast: relays
             },
             {"type": "search", "area": "search_beach", "sensor": {"sweep_width_m": 5.0}, "robots": 2},
         ],
@@ -247,7 +247,7 @@ def test_link_margins_follow_the_link_budget(plan, mission):
     for (a, b), margin in zip(r.edges, margins, strict=True):
         d = float(np.hypot(*(nodes[a] - nodes[b])))
         assert d <= r.comm_range_m + 1e-6
-        heights = [2.5 if k < fixed else radio.tx_height_m for k in (a, b)]
+        heights = [0.7 if k < fixed else radio.tx_height_m for k in (a, b)]
         expected = link_margin_db(
             d, dataclasses.replace(radio, tx_height_m=heights[0], rx_height_m=heights[1])
         )
