@@ -238,8 +238,9 @@ class MissionPlan:
         return {
             "robots": len(self.robots),
             "roles": {k: v for k, v in roles.items() if v},
-            "last_arrival_s": max((b.eta_s for b in working), default=0.0),
-            "first_arrival_s": min((b.eta_s for b in working), default=0.0),
+            # None where no robot has a station (all spares)
+            "last_arrival_s": max((b.eta_s for b in working), default=None),
+            "first_arrival_s": min((b.eta_s for b in working), default=None),
             "total_length_m": sum(b.length_m for b in self.robots),
             "relays": 0 if self.relay is None else len(self.relay.positions_m),
             "search_tracks_m": sum(sum(t.length for ts in s.tracks for t in ts) for s in self.search),
@@ -337,7 +338,8 @@ class MissionPlan:
                 "redundancy": r.redundancy,
                 "positions_m": r.positions_m.tolist(),
                 "edges": r.edges.tolist(),
-                "max_hop_m": float(r.relay_hops_m().max(initial=0.0)),
+                # None with no relay (the terminals link directly)
+                "max_hop_m": float(r.relay_hops_m().max()) if len(r.relay_hops_m()) else None,
             }
             margins = r.link_margins_db()
             if margins is not None:

@@ -262,8 +262,9 @@ def summary_table(data: dict) -> list[list[str]]:
         rows.append(
             [
                 "relays",
-                f"{r['relays']} (range {r['comm_range_m']:.0f} m, longest hop "
-                f"{_num(r['max_hop_m'], '.0f')} m, least link margin {_num(r['min_margin_db'], '.1f')} dB)"
+                f"{r['relays']} (range {r['comm_range_m']:.0f} m, "
+                f"longest hop {_num(r['max_hop_m'], '.0f', ' m')}, "
+                f"least link margin {_num(r['min_margin_db'], '.1f', ' dB')})"
                 + (
                     f"; {r['direct_links']} direct link(s) between the source's and sinks' masts"
                     if r["direct_links"]
