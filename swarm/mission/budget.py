@@ -9,11 +9,16 @@ rates the simulator draws from (`swarm.sim.hazards`):
   the search's design counts on; the losses the plan reports run to the end of beach operations);
 - wave impact: 1 - prod(1 - p_hit), one breaker a wave period T while in the surf zone, each
   disabling with `SurfHazard.damage_probability` at the local breaker height where it hits
-  (`swarm.world.coastal.local_breaker_height`, as the simulator's hazards); the time in the surf is
-  the planned way in over surf-zone cells (sea leg and ground path) at the way a robot makes there
-  among the breakers, and the heights are met in proportion to the time under them
-  (`swarm.mission.surf_speed`); ashore, the same on the search tracks' surf-zone cells at the
-  search speed;
+  (`swarm.world.coastal.local_breaker_height`, as the simulator's hazards). On the way in, the
+  breakers a robot meets until its wheels ground, its way in driven by the simulator's rules
+  (`swarm.mission.surf_drive`: the longshore current sets a swimming robot along the beach, so a
+  robot can be among the breakers far longer than its line's length says), averaged over the
+  wave's phase as survival chances; elsewhere (the swash, the search tracks' surf-zone cells at
+  the search speed, the way back) the time over surf-zone cells at the way a robot makes there
+  among the breakers, the heights met in proportion to the time under them
+  (`swarm.mission.surf_speed`);
+- surf timeout: the share of the wave's phases at which that drive is still in the surf zone when
+  `surf_crossing.time_limit_s` runs out, among those the breakers have not disabled first;
 - immobilization: per_km x mode factor x (1 + (slip / 0.3)^2) per metre on each class, with each
   mode's steady slip at cruise (the cost map's mode speeds);
 - rock: damage_per_km per metre on rock, and hidden rocks met per metre on land (hidden_per_ha x
@@ -80,6 +85,10 @@ RETREAT_FACTOR, RETREAT_ALLOWANCE_S, STANDOFF_MARGIN_M = 1.5, 30.0, 10.0
 #: Mark, immobilization: slip scale of the immobilization rate (schema `Immobilization`).
 SLIP_SCALE = 0.3
 PHASE_NAMES = ("sea", "surf", "beach")
+#: Causes that strike at the end of their phase, not at a rate along it: the surf timeout takes a
+#: robot still among the breakers when the limit runs out, so the breakers and failures come first
+#: (a way in that always times out still loses a robot a breaker took to the breakers).
+AT_PHASE_END = ("surf_timeout",)
 #: The losses on the way back to sea after the task window (`return_losses`), reported beside the
 #: phases above but not counted against the tasks: the robots have done their work by then.
 RETURN_PHASE = "return"
@@ -145,6 +154,9 @@ class Exposure:
     #: and -log(1 - p) of one breaker there, averaged as `breaker_hazard`
     beach_surf_s: float = 0.0
     beach_breaker_hazard: float = 0.0
+    #: chance the way in is still among the breakers when the surf crossing's time limit runs out
+    #: (`swarm.mission.surf_drive`), among those the breakers have not taken by then
+    surf_timeout: float = 0.0
 
 
 def surf_cells(mission: Mission) -> np.ndarray:
@@ -247,6 +259,8 @@ def robot_losses(mission: Mission, cm: CostMap, exposure: Exposure) -> dict[str,
     if per_hit is None:
         per_hit = -math.log1p(-hz.surf.impact_damage_probability())
     out["surf"]["wave_impact"] = -math.expm1(-hits * per_hit)
+    if exposure.surf_timeout > 0:
+        out["surf"]["surf_timeout"] = min(exposure.surf_timeout, 1.0)
     ashore_hits = exposure.beach_surf_s / hz.surf.wave_period_s
     out["beach"]["wave_impact"] = -math.expm1(-ashore_hits * exposure.beach_breaker_hazard)
     names = cm.speeds.names
@@ -298,18 +312,23 @@ def expected_by_cause(
 ) -> dict[str, dict[str, float]]:
     """One robot's chance of being lost in each phase to each cause, in phase order: a robot lost
     in one phase is not lost again in the next, and within a phase the causes share its loss in
-    proportion to their hazards -log(1 - p) (constant-rate competing risks). The sum over phases
-    and causes is `lost_probability`."""
+    proportion to their hazards -log(1 - p) (constant-rate competing risks), but for a cause of
+    `AT_PHASE_END`, which takes its share of those the others leave. The sum over phases and
+    causes is `lost_probability`."""
     out: dict[str, dict[str, float]] = {}
     going = 1.0
     for phase in phases:
-        causes = losses.get(phase, {})
+        causes = {c: p for c, p in losses.get(phase, {}).items() if c not in AT_PHASE_END}
         lost = going * (1.0 - math.prod(1.0 - p for p in causes.values()))
         certain = {c: 1.0 for c, p in causes.items() if p >= 1.0}  # an infinite hazard each
         weights = certain or {c: -math.log1p(-p) for c, p in causes.items()}
         total = sum(weights.values())
         out[phase] = {c: lost * w / total for c, w in weights.items()} if total > 0 else {}
         going -= lost
+        for cause in AT_PHASE_END:  # what the others leave
+            if (p := losses.get(phase, {}).get(cause, 0.0)) > 0:
+                out[phase][cause] = going * p
+                going -= going * p
     return out
 
 

@@ -17,7 +17,7 @@ from scipy.spatial import cKDTree
 from scipy.spatial.distance import cdist
 from shapely.geometry import LineString
 
-from swarm.mission import budget
+from swarm.mission import budget, surf_drive
 from swarm.mission.schema import Mission
 from swarm.mission.surf_speed import Crossing, SurfZone
 from swarm.planning import CostMap
@@ -123,20 +123,53 @@ def _found_before(mission: Mission, search: SearchPlan) -> float:
     return budget.found_by_lanes_before(search.model, search.sweep_width_m, search.spacing_m, curve)
 
 
-def way_in(mission: Mission, cm: CostMap, rp: RobotPlan, zone: SurfZone, ashore, mine_area, by_task) -> WayIn:
-    """Robot `rp`'s exposure along its planned route: the swim, the surf along the sea leg and the
-    ground path at the way it makes there (`SurfZone.crossing`; a spare swims from its entry to the
-    nearest dry ground, where the simulator's robots wait out of the breakers), and its ground route
-    until its task's window ends."""
-    swim = mission.robot.swim_speed_mps
+def route_in(rp: RobotPlan, ashore) -> np.ndarray:
+    """Robot `rp`'s way in from its launch point: the sea leg and its ground path (a spare swims
+    from its entry to the nearest dry ground, `ashore`, where the simulator's robots wait out of
+    the breakers)."""
     sea_leg = rp.sea_leg_m.reshape(-1, 2)
     on = rp.ground_m.reshape(-1, 2) if len(rp.ground_m) else ashore(sea_leg[-1])
+    return np.vstack([sea_leg, on])
+
+
+def surf_terms(drive: surf_drive.WayIn, period_s: float) -> tuple[float, float, float]:
+    """A way in's time in the surf (s), one breaker's hazard and the chance of a surf timeout as
+    `budget.Exposure` counts them, from its drive at each wave phase: the breakers' survival and
+    the timeouts among the survivors averaged over the phases, so the surf's losses are the mean
+    of the phases' (a phase that times out has met more breakers than the mean)."""
+    seconds = float(drive.surf_s.mean())
+    survive = np.exp(-drive.hazard)
+    kept = float(survive.mean())
+    per_hit = -math.log(kept) * period_s / seconds if seconds > 0 and kept < 1.0 else 0.0
+    timeout = 1.0 - float((survive * ~drive.timed_out).mean()) / kept if kept > 0 else 0.0
+    return seconds, per_hit, timeout
+
+
+def way_in(
+    mission: Mission,
+    cm: CostMap,
+    rp: RobotPlan,
+    zone: SurfZone,
+    ashore,
+    mine_area,
+    by_task,
+    drive: surf_drive.WayIn,
+) -> WayIn:
+    """Robot `rp`'s exposure along its planned route: the swim, the surf on the way in as the
+    simulator's robots drive it (`drive`, of `route_in`: `surf_drive.drive_in`), the swash beyond
+    where the wheels ground at the way a robot makes there (`SurfZone.crossing`), and its ground
+    route until its task's window ends."""
+    swim = mission.robot.swim_speed_mps
+    sea_leg = rp.sea_leg_m.reshape(-1, 2)
     leg = zone.crossing(sea_leg)
     # afloat until the wheels ground (the simulator's surf phase), then wading out of the breakers
-    afloat, wading = zone.landfall(np.vstack([sea_leg, on]))
-    surf, swash = zone.crossing(afloat), zone.crossing(wading)
+    way = route_in(rp, ashore)
+    _, wading = zone.landfall(way)
+    swash = zone.crossing(wading)
+    surf_s, per_hit, timeout = surf_terms(drive, mission.hazards.surf.wave_period_s)
+    landed = drive.surf_s[drive.ashore]
     arrive = rp.release_s + rp.sea_time_s  # the schedule swims the sea leg at swim speed
-    ashore_s = arrive + max(surf.seconds - leg.seconds, 0.0)
+    ashore_s = arrive + max((float(landed.mean()) if len(landed) else surf_s) - leg.seconds, 0.0)
     search = by_task.get(rp.task or "")
     end = search.design["window_s"][1] if search is not None else mission.beach_end_s
     land = np.vstack([p.reshape(-1, 2) for p in (rp.ground_m, rp.track_m)])
@@ -150,16 +183,17 @@ def way_in(mission: Mission, cm: CostMap, rp: RobotPlan, zone: SurfZone, ashore,
     wet = zone.crossing(rp.track_m, budget.ground_speed(mission, speed))
     exposure = budget.Exposure(
         sea_s=max(rp.sea_time_s - leg.metres / swim, 0.0),
-        surf_s=surf.seconds,
+        surf_s=surf_s,
         beach_s=max(end - ashore_s, 0.0),
         driven_m=add_metres(approach, track),
         in_mine_area_m=approach_inside + track_inside,
-        breaker_hazard=surf.hazard_per_hit,
+        breaker_hazard=per_hit,
         speed_mps=speed,
         beach_surf_s=wet.seconds + swash.seconds,
         beach_breaker_hazard=_mean_hazard(wet, swash),
+        surf_timeout=timeout,
     )
-    last = (land if len(land) else on)[-1]
+    last = (land if len(land) else way)[-1]
     before, on_track = None, None
     if len(rp.track_m):
         v = budget.ground_speed(mission, speed)
@@ -167,9 +201,27 @@ def way_in(mission: Mission, cm: CostMap, rp: RobotPlan, zone: SurfZone, ashore,
         track_s = min(sum(track.values()) / v, exposure.beach_s - before_s)
         before = budget.Exposure(0.0, 0.0, before_s, approach, approach_inside, speed_mps=speed)
         on_track = dataclasses.replace(
-            exposure, sea_s=0.0, surf_s=0.0, beach_s=track_s, driven_m=track, in_mine_area_m=track_inside
+            exposure,
+            sea_s=0.0,
+            surf_s=0.0,
+            beach_s=track_s,
+            driven_m=track,
+            in_mine_area_m=track_inside,
+            surf_timeout=0.0,
         )
     return WayIn(exposure, search, arrive, ashore_s, end, last, track, track_inside, before, on_track)
+
+
+def ways_in(
+    mission: Mission, cm: CostMap, robots: list, zone: SurfZone, ashore, mine_area, by_task
+) -> list[WayIn]:
+    """`way_in` of each robot of `robots`, their ways in through the surf driven together
+    (`surf_drive.drive_in` of their `route_in`)."""
+    drives = surf_drive.drive_in(mission, zone, [route_in(rp, ashore) for rp in robots])
+    return [
+        way_in(mission, cm, rp, zone, ashore, mine_area, by_task, drive)
+        for rp, drive in zip(robots, drives, strict=True)
+    ]
 
 
 def off_plan_driving(

@@ -44,7 +44,7 @@ from shapely.geometry import LineString, Polygon
 
 from swarm.errors import SwarmError
 from swarm.files import write_text_atomic
-from swarm.mission import budget, exposure
+from swarm.mission import budget, exposure, surf_drive
 from swarm.mission.schema import Mission
 from swarm.mission.surf_speed import SurfZone
 from swarm.planning import CostMap, PlanningError, build_costmap, detection
@@ -632,6 +632,7 @@ def _plan_search(
     reach = detection.expected_detection(mine_area, dense, model, width, table, ground=cm)
     fractions = _class_fractions(cm, polygon)
     approach = float(shapely.distance(shapely.Point(*launches.mean(axis=0)), polygon))
+    swim = _swim_times(mission, cm, launches, polygon)
 
     def found_before(spacing: float) -> float:
         return budget.found_by_lanes_before(model, width, spacing, task.sensor.lateral_range)
@@ -639,7 +640,7 @@ def _plan_search(
     def typical_losses(spacing: float, searchers: int) -> dict:
         run_m = polygon.area / spacing / max(searchers, 1) + approach
         window = budget.search_window_s(mission, task, start)
-        sea_s, surf_s, per_hit = _swim_times(mission, cm, launches, polygon)
+        sea_s, surf_s, per_hit, timeout = swim
         exposed = budget.Exposure(
             sea_s=sea_s,
             surf_s=surf_s,
@@ -648,6 +649,7 @@ def _plan_search(
             in_mine_area_m=(run_m - approach) * (1.0 - found_before(spacing)),
             breaker_hazard=per_hit,
             speed_mps=speed,
+            surf_timeout=timeout,
         )
         return budget.robot_losses(mission, cm, exposed)
 
@@ -757,23 +759,27 @@ def _class_fractions(cm: CostMap, polygon) -> dict[str, float]:
     return {cm.terrain_classes[c]: float(v) for c, v in enumerate(counts) if v > 0}
 
 
-def _swim_times(mission: Mission, cm: CostMap, launches: np.ndarray, polygon) -> tuple[float, float, float]:
-    """A robot's time at sea (at swim speed) and in the surf (surf cells, at the way it makes
-    there: `SurfZone.crossing`) on its way from a launch point toward `polygon`, and one breaker's
-    hazard on the way, averaged over the launch points."""
+def _swim_times(
+    mission: Mission, cm: CostMap, launches: np.ndarray, polygon
+) -> tuple[float, float, float, float]:
+    """A robot's time at sea (at swim speed) and in the surf on its way from a launch point
+    straight toward `polygon`, one breaker's hazard on the way and the chance it times out in the
+    surf, as `budget.Exposure` counts them, over the launch points: the way in driven by the
+    simulator's rules (`surf_drive.drive_in`, `exposure.surf_terms`)."""
     swim = mission.robot.swim_speed_mps
     zone = SurfZone(mission, cm)
-    sea, surf, hazard = [], [], []
+    sea, lines = [], []
     for p in launches:
         q = np.array(shapely.ops.nearest_points(polygon, shapely.Point(*p))[0].coords[0])
         by_class, _ = budget.driven_by_class(cm, np.vstack([p, q]), None)
         crossing = zone.crossing(np.vstack([p, q]))
         water_m = sum(v for c, v in by_class.items() if mission.terrain_library[c].is_water)
         sea.append((mission.launch.release_offshore_m + max(water_m - crossing.metres, 0.0)) / swim)
-        surf.append(crossing.seconds)
-        hazard.append(crossing.hazard_per_hit * crossing.seconds)
-    seconds = sum(surf)
-    return float(np.mean(sea)), float(np.mean(surf)), float(sum(hazard) / seconds) if seconds > 0 else 0.0
+        lines.append(np.vstack([p, q]))
+    drives = surf_drive.drive_in(mission, zone, lines)
+    every = surf_drive.WayIn(*(np.concatenate(parts) for parts in zip(*drives, strict=True)))
+    surf_s, per_hit, timeout = exposure.surf_terms(every, mission.hazards.surf.wave_period_s)
+    return float(np.mean(sea)), surf_s, per_hit, timeout
 
 
 def _arrival_estimate_s(mission: Mission, launches: np.ndarray, polygon) -> float:
@@ -932,7 +938,7 @@ def _budget(mission: Mission, plan: MissionPlan) -> dict:
     if back.enabled:
         launches = np.array([rp.launch_m for rp in plan.robots])
         way_out = exposure.WayOut(mission, cm, pickup_points(mission, launches))
-    ways = [exposure.way_in(mission, cm, rp, zone, ashore, mine_area, by_task) for rp in driven.robots]
+    ways = exposure.ways_in(mission, cm, driven.robots, zone, ashore, mine_area, by_task)
     extra, trips_m = exposure.off_plan_driving(mission, cm, driven, ways)
     for rp, way, (more_m, more_inside) in zip(driven.robots, ways, extra, strict=True):
         exposed = dataclasses.replace(
@@ -1087,6 +1093,11 @@ def _budget(mission: Mission, plan: MissionPlan) -> dict:
         "expected_expended": markers,
         "expected_recovered": recovered,
         "search": searches,
+        # the robots whose way in is still among the breakers when the surf crossing's time limit
+        # runs out at every phase of the wave: this plan cannot land them (`surf_drive`)
+        "stranded_in_surf": [
+            rp.id for rp, w in zip(plan.robots, ways, strict=True) if w.exposure.surf_timeout >= 1.0
+        ],
     }
 
 

@@ -45,7 +45,8 @@ SETTLE_PERIODS, MEASURED_PERIODS = 1, 1
 #: makes the same way whichever polyline crosses it.
 HEADING_BIN_DEG = 5.0
 #: The slowest way a robot is counted to make, as a share of its commanded speed: where the flow
-#: holds it back entirely the simulator strands it (`surf_timeout`), which the budget counts apart.
+#: holds it back entirely the simulator strands it (`surf_timeout`), which the budget counts apart
+#: on the way in (`swarm.mission.surf_drive`).
 SLOWEST_SHARE = 0.1
 
 
@@ -122,7 +123,8 @@ class SurfZone:
         self.mission, self.cm = mission, cm
         bm = mission.beach_map
         self.heights = budget.surf_heights(mission)
-        self._shoreward = shoreward_direction(bm.elevation_m, bm.cell_m)
+        #: (rows, cols, 2) where the breakers run (`coastal.shoreward_direction`)
+        self.shoreward = shoreward_direction(bm.elevation_m, bm.cell_m)
         self._gradient = np.stack(bm.gradient, axis=-1)
         self._depth = -bm.elevation_m.astype(np.float64)
         self._classes = list(bm.terrain_classes)
@@ -187,7 +189,7 @@ class SurfZone:
                 [self._classes[t] for t in self._terrain[r, c]],
                 self._depth[r, c],
                 self.heights[r, c],
-                frame(self._shoreward[r, c]),
+                frame(self.shoreward[r, c]),
                 frame(self._gradient[r, c]),
                 speed,
                 current=frame(np.broadcast_to(self._current, (len(r), 2))),

@@ -99,6 +99,7 @@ def _losses(d: dict) -> dict | None:
         "total": b["expected_lost"],
         "expended": b.get("expected_expended"),
         "recovered": b.get("expected_recovered"),
+        "stranded": b.get("stranded_in_surf") or [],
     }
 
 
@@ -299,6 +300,15 @@ def summary_table(data: dict) -> list[list[str]]:
         phases = ", ".join(f"{p} {sum(c.values()):.1f}" for p, c in losses["by_phase"].items())
         text = f"{losses['total']:.1f} robots ({phases})" if losses["hazards"] else "none: hazards off"
         rows.append(["expected losses", text])
+        if losses.get("stranded"):
+            rows.append(
+                [
+                    "note surf",
+                    f"{len(losses['stranded'])} of {s['robots']} robots cannot finish the surf crossing "
+                    "within its time limit at these breakers, at any phase of the wave: the longshore "
+                    "current sets them along the beach while they swim",
+                ]
+            )
         ends = []
         if losses.get("expended") and losses["expended"][1] > 0:
             ends.append(f"{robots_range(losses['expended'])} expended marking mines for the clearance")

@@ -502,7 +502,7 @@ def _extras(overrides: dict) -> tuple[list, list, exposure.Trips]:
     ashore = exposure.nearest_ashore(m, cm, zone.heights > 0)
     area = shapely.union_all(budget.mine_areas(m))
     by_task = {s.task: s for s in plan.search}
-    ways = [exposure.way_in(m, cm, rp, zone, ashore, area, by_task) for rp in plan.robots]
+    ways = exposure.ways_in(m, cm, plan.robots, zone, ashore, area, by_task)
     extra, trips = exposure.off_plan_driving(m, cm, plan, ways)
     return extra, [rp.role for rp in plan.robots], trips["beach_search"]
 

@@ -1,0 +1,187 @@
+"""The plan's way in through the surf (`swarm.mission.surf_drive`) against the simulator's own
+physics, controller and route follower, and the surf losses the budget makes of it against the
+formulas and against simulated runs."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from swarm.mission import budget, exposure, load_mission, surf_drive
+from swarm.mission.plan import _budget, plan_mission
+from swarm.mission.surf_speed import SurfZone
+from swarm.planning.router import Router
+from swarm.robot.terrain import GROUND_SUBMERSION
+from swarm.sim import control, routes, setup
+from swarm.sim.control import DriveLimits, drive_toward
+from swarm.sim.env import SimConfig
+from swarm.sim.physics import Physics, SeaState
+from swarm.sim.routes import Routes
+from swarm.sim.run import simulate_batch
+from swarm.studies.stats import count_mean_interval
+
+LANDING = "missions/landing.yaml"
+
+
+def _landing(height_m: float):
+    return load_mission(LANDING, {"hazards.surf.wave_height_m": height_m})
+
+
+@pytest.fixture(scope="module")
+def landing_plan():
+    mission = _landing(4.0)
+    return mission, plan_mission(mission, seed=mission.seed, workers=1)
+
+
+def _ways_in(mission, plan) -> list[np.ndarray]:
+    """Each robot's way in as the budget drives it (`exposure.route_in` of the stitched routes)."""
+    cm = plan.costmap
+    zone = SurfZone(mission, cm)
+    ashore = exposure.nearest_ashore(mission, cm, zone.heights > 0)
+    router = Router(cm, seed=mission.seed)
+    return [exposure.route_in(exposure.drivable(rp, router), ashore) for rp in plan.robots]
+
+
+def _simulated_ways_in(mission, lines: list[np.ndarray], phases: np.ndarray):
+    """The same ways in driven by the simulator's classes (`Physics`, `drive_toward`, `Routes`),
+    hazards and flips left out: each one's seconds in the surf zone until its wheels ground or
+    the limit passes, and whether it passed."""
+    cfg = SimConfig()
+    swim = mission.robot.swim_speed_mps
+    jet = mission.robot.jet_thrust_n or mission.terrain_library.default_jet_thrust_n(swim)
+    sea = SeaState.from_mission(mission)
+    physics = Physics(mission.beach_map, mission.terrain_library, mission.robot_params, sea,
+                      jet_thrust_max_n=jet, substep_s=cfg.substep_s)  # fmt: skip
+    cruise = mission.robot.wheel_speed_mps
+    limits = DriveLimits(mission.robot_params.wheel_radius_m, mission.robot_params.track_width_m,
+                         cruise, setup.MAX_WHEEL_SPEED_FACTOR * cruise, jet)  # fmt: skip
+    every = [line for line in lines for _ in phases]
+    n = len(every)
+    follow = Routes(n)
+    for i, line in enumerate(every):
+        follow.set(i, line)
+    state = np.zeros((n, 6))
+    state[:, :2] = [line[0] for line in every]
+    state[:, 2] = [math.atan2(*(line[1] - line[0])[::-1]) for line in every]
+    submersion, inverted = np.zeros(n), np.zeros(n, bool)
+    surf_s, done, timed_out = np.zeros(n), np.zeros(n, bool), np.zeros(n, bool)
+    limit = mission.phases.surf_crossing.time_limit_s
+    wave_phase, each = np.tile(phases, len(lines)), np.arange(n)  # each robot a run of its own
+    dt = cfg.dt_s
+    for step in range(int(2 * limit / dt)):
+        follow.advance(state[:, :2], np.ones(n, bool))
+        wheels, thrust, _ = drive_toward(
+            state, follow.steer_points(state[:, :2]), cruise, submersion, inverted, limits
+        )
+        res = physics.step(state, wheels, thrust, inverted, np.full(n, step * dt), dt, wave_phase, run=each)
+        state, submersion = res.state, res.submersion
+        live = ~done & ~timed_out
+        surf_s += np.where(live & res.in_surf, dt, 0.0)
+        done |= live & (submersion < GROUND_SUBMERSION)
+        timed_out |= live & ~done & (surf_s > limit)
+        if (done | timed_out).all():
+            break
+    k = len(phases)
+    return surf_s.reshape(-1, k), timed_out.reshape(-1, k)
+
+
+def test_the_drive_s_rules_are_the_simulator_s() -> None:
+    """The constants the reduced drive mirrors are the simulator's own."""
+    cfg = SimConfig()
+    assert (cfg.dt_s, cfg.substep_s) == (surf_drive.STEP_S, surf_drive.SUBSTEP_S)
+    assert surf_drive.CAPTURE_M == routes.CAPTURE_M
+    assert surf_drive.FINAL_CAPTURE_M == routes.FINAL_CAPTURE_M
+    assert surf_drive.LOOKAHEAD_M == routes.LOOKAHEAD_M
+    assert surf_drive.PASS_CROSS_TRACK_M == routes.PASS_CROSS_TRACK_M
+    assert surf_drive.YAW_GAIN_PER_S == control.YAW_GAIN_PER_S
+    assert surf_drive.MAX_YAW_RATE_RADPS == control.MAX_YAW_RATE_RADPS
+    assert surf_drive.PIVOT_ERROR_RAD == control.PIVOT_ERROR_RAD
+    assert surf_drive.ARRIVE_M == control.ARRIVE_M
+    assert surf_drive.EFFECTIVE_TRACK_SCALE == control.EFFECTIVE_TRACK_SCALE
+    assert surf_drive.MAX_WHEEL_SPEED_FACTOR == setup.MAX_WHEEL_SPEED_FACTOR
+
+
+def test_the_way_in_is_the_simulator_s(landing_plan) -> None:
+    """landing's ways in at 4 m breakers, driven by the simulator's physics, controller and route
+    follower at the drive's wave phases: the same robots are swept along the beach until the limit
+    (launch_2's landers, whose sea leg heads up-current), and the others are among the breakers as
+    long, phase by phase."""
+    mission, plan = landing_plan
+    lines = _ways_in(mission, plan)
+    zone = SurfZone(mission, plan.costmap)
+    drives = surf_drive.drive_in(mission, zone, lines)
+    period = mission.hazards.surf.wave_period_s
+    phases = np.arange(surf_drive.WAVE_PHASES) * period / surf_drive.WAVE_PHASES
+    simulated_s, simulated_out = _simulated_ways_in(mission, lines, phases)
+    planned_out = np.array([d.timed_out for d in drives])
+    assert planned_out.any() and not planned_out.all()
+    assert np.array_equal(planned_out, simulated_out)
+    planned_s = np.array([d.surf_s for d in drives])
+    landed = ~planned_out
+    assert planned_s[landed] == pytest.approx(simulated_s[landed], abs=2 * surf_drive.STEP_S)
+
+
+def test_the_surf_s_losses_are_the_mean_of_the_wave_phases(landing_plan) -> None:
+    """A way in that times out at some phases: the surf's breaker and timeout losses the budget
+    makes of it (`exposure.surf_terms`, `robot_losses`, `expected_by_cause`) are the phases' mean
+    of 1 - exp(-hazard) and exp(-hazard) x timed out; the breakers come first."""
+    mission, plan = landing_plan
+    cm = plan.costmap
+    drive = surf_drive.WayIn(
+        surf_s=np.array([100.0, 300.0, 601.0, 601.0]),
+        hazard=np.array([0.05, 0.2, 0.6, 0.9]),
+        ashore=np.array([True, True, False, False]),
+        timed_out=np.array([False, False, True, True]),
+    )
+    surf_s, per_hit, timeout = exposure.surf_terms(drive, mission.hazards.surf.wave_period_s)
+    assert surf_s == pytest.approx(drive.surf_s.mean())
+    exposed = budget.Exposure(0.0, surf_s, 0.0, breaker_hazard=per_hit, surf_timeout=timeout)
+    losses = budget.robot_losses(mission, cm, exposed)
+    losses["surf"].pop("failure")
+    by_cause = budget.expected_by_cause(losses)["surf"]
+    survive = np.exp(-drive.hazard)
+    assert by_cause["wave_impact"] == pytest.approx(np.mean(1.0 - survive))
+    assert by_cause["surf_timeout"] == pytest.approx(np.mean(survive * drive.timed_out))
+
+
+def test_a_timeout_takes_what_the_other_causes_leave() -> None:
+    """A certain timeout beside a breaker's chance p: the breakers take p, the timeout the rest
+    (a hazard-weighted share would give the timeout all of it)."""
+    p = 0.3
+    losses = {"surf": {"wave_impact": p, "surf_timeout": 1.0}, "beach": {"failure": 0.5}}
+    out = budget.expected_by_cause(losses)
+    assert out["surf"] == pytest.approx({"wave_impact": p, "surf_timeout": 1.0 - p})
+    assert out["beach"]["failure"] == pytest.approx(0.0)
+
+
+def test_the_same_routes_lose_more_in_the_surf_the_bigger_the_breakers(landing_plan) -> None:
+    """landing's routes budgeted at 1, 2.5 and 4 m breakers: the expected losses in the surf grow
+    with the breakers; there is no timeout at 1 m, and at 4 m the robots the drive strands are
+    named and expected lost."""
+    _, plan = landing_plan
+    surf, stranded = [], []
+    for h in (1.0, 2.5, 4.0):
+        b = _budget(_landing(h), plan)
+        surf.append(sum(b["expected_losses"]["surf"].values()))
+        stranded.append(b["stranded_in_surf"])
+        if h == 1.0:
+            assert "surf_timeout" not in b["expected_losses"]["surf"]
+    assert np.all(np.diff(surf) > 0.0)
+    assert stranded[0] == [] and len(stranded[-1]) > 0
+    assert surf[-1] > len(stranded[-1])
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("height_m", [1.5, 3.0, 4.0])
+def test_landing_s_plan_agrees_with_its_runs_at_any_breakers(height_m: float) -> None:
+    """The plan's expected losses lie in the 95% interval of 16 simulated runs' (as `plan
+    --evaluate` judges them); the plan without the drive counted 1.1 robots at 3 and 4 m against
+    3.9 and 4.8 simulated."""
+    mission = _landing(height_m)
+    plan = plan_mission(mission, seed=mission.seed, workers=1)
+    logs = simulate_batch(mission, list(range(100, 116)), plan=plan)
+    lost = [len(log.losses) for log in logs]
+    low, high = count_mean_interval(lost, within=(0.0, mission.swarm.count))
+    assert low <= plan.budget["expected_lost"] <= high
