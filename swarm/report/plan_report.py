@@ -127,6 +127,9 @@ def _relay(d: dict) -> dict | None:
         "relays": len(positions),
         # robots the plan puts on a relay position: fewer than positions when the swarm is too small
         "staffed": sum(1 for robot in d.get("robots", []) if robot.get("role") == "relay"),
+        # the share of the window enough positions are expected held for the link, after the
+        # losses (plan.json's budget; None for a plan without one)
+        "held_after_losses": ((d.get("budget") or {}).get("relay") or {}).get("p_held"),
         "max_hop_m": r.get("max_hop_m"),
         "min_margin_db": None if r.get("min_margin_db") is None else round(float(r["min_margin_db"]), 1),
         "fixed_height_m": r.get("fixed_height_m"),
@@ -136,8 +139,10 @@ def _relay(d: dict) -> dict | None:
 
 def _checks(search: list[dict], relay: dict | None, losses: dict | None, criteria: dict) -> list[dict]:
     """What a plan can hold against the success criteria: each search area's expected detection
-    against min_detection_fraction, every relay link closing (margin >= 0 dB), and the robots
-    expected back at sea against min_robots_recovered."""
+    against min_detection_fraction, every relay position staffed and the share of the window
+    enough of them are held for the link after the losses (`budget.p_at_least`) against
+    min_relay_connected_fraction, every relay link closing (margin >= 0 dB), and the
+    robots expected back at sea against min_robots_recovered."""
     out = []
     target = criteria.get("min_detection_fraction")
     if target is not None:
@@ -161,6 +166,20 @@ def _checks(search: list[dict], relay: dict | None, losses: dict | None, criteri
                 "target": float(relay["relays"]),
                 "unit": "robots",
                 "met": relay["staffed"] >= relay["relays"],
+            }
+        )
+    connected = criteria.get("min_relay_connected_fraction")
+    if relay is not None and relay["relays"] and relay.get("held_after_losses") is not None and connected:
+        # robots lost before they reach their positions hold none
+        share = relay["held_after_losses"]
+        out.append(
+            {
+                "criterion": "share of the time the relay's positions are held after losses"
+                f" ({relay['task']})",
+                "value": share,
+                "target": connected,
+                "unit": "fraction",
+                "met": share >= connected - 1e-12,
             }
         )
     if relay is not None and relay["min_margin_db"] is not None:
