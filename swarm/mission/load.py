@@ -17,7 +17,8 @@ mission = load_mission("missions/landing.yaml", {"swarm.count": 20, "hazards.sur
    (relative to the mission file) and load; every region a mission names must exist in the map
    with the right kind; points must lie in the map (in the water for a sea launch, on passable
    ground for tasks); and the parts must agree (a clearance before beach operations end, enough
-   robots for each task, a release point the robots can swim from in time).
+   robots for each task, a release point the robots can swim from in time, a dwell or hold robots
+   placed on the beach can drive to in time).
 
 The loaded `Mission` carries what it resolved: `mission.beach_map`, `mission.terrain_library`,
 `mission.robot_params`, `mission.planner_profile`, `mission.resolved("map_path")`.
@@ -26,6 +27,7 @@ The loaded `Mission` carries what it resolved: `mission.beach_map`, `mission.ter
 from __future__ import annotations
 
 import copy
+import math
 import os
 from collections.abc import Mapping, Sequence
 from importlib import resources
@@ -43,6 +45,11 @@ from swarm.mission.schema import (
     Mission,
     SearchTask,
 )
+
+#: A robot watches an observation point or holds a beacon within this distance (m): the simulator's
+#: `swarm.sim.criteria.STATION_RADIUS_M` (the mission layer sits above the simulator).
+STATION_RADIUS_M = 3.0
+
 
 # --- YAML ---------------------------------------------------------------------------------------------
 
@@ -365,10 +372,12 @@ class _References:
                 for i, sink in enumerate(task.sinks):
                     self.place([*at, "sinks", i], sink, ("relay_sink",), "land", " (a relay sink)")
             elif task.type == "surveillance":
-                for i, point in enumerate(task.points):
+                xy = [
                     self.place(
                         [*at, "points", i], point, ("observation_point",), "land", " (an observation point)"
                     )
+                    for i, point in enumerate(task.points)
+                ]
                 self._robots(
                     [*at, "robots_per_point"], task.robots_per_point, len(task.points), "points", count
                 )
@@ -378,9 +387,12 @@ class _References:
                         task.dwell_s,
                         f"at most phases.beach_operations.time_limit_s ({beach_limit:g} s)",
                     )
+                self._time_at(at, "dwell_s", task.dwell_s, task.points, xy)
             elif task.type == "beacon":
-                for i, point in enumerate(task.points):
+                xy = [
                     self.place([*at, "points", i], point, ("beacon",), "land", " (a beacon)")
+                    for i, point in enumerate(task.points)
+                ]
                 self._robots(
                     [*at, "robots_per_point"], task.robots_per_point, len(task.points), "points", count
                 )
@@ -390,6 +402,8 @@ class _References:
                         task.hold_s,
                         f"at most phases.beach_operations.time_limit_s ({beach_limit:g} s)",
                     )
+                if task.hold_s is not None:
+                    self._time_at(at, "hold_s", task.hold_s, task.points, xy)
 
         # every station at once: each task fits alone (above), and together they must too
         held = {
@@ -432,6 +446,34 @@ class _References:
             raise err(
                 ["success", "min_robots_recovered"], rec, "0 when phases.return_to_sea.enabled is false"
             )
+
+    def _time_at(self, at: Parts, key: str, required_s: float, names: Sequence, xy: list) -> None:
+        """A beach launch's robots start ashore when beach operations start, and no robot drives
+        faster than its wheels turn: a point farther from every launch point than its station
+        radius leaves at most the time limit less that straight drive for its dwell or hold. (A
+        sea launch's way in is the plan's to judge: `swarm.mission.plan`'s station times.) recon
+        at a 1800 s limit passed with a 1800 s dwell, and none of its runs could succeed."""
+        m = self.mission
+        if m.launch.platform != "beach" or not m.launch.points:
+            return
+        limit = m.phases.beach_operations.time_limit_s
+        v = m.robot.wheel_speed_mps
+        launches = [
+            self.place(["launch", "points", i], p, ("launch",)) for i, p in enumerate(m.launch.points)
+        ]
+        for name, (x, y) in zip(names, xy, strict=True):
+            near = min(math.hypot(x - lx, y - ly) for lx, ly in launches)
+            drive_s = max(near - STATION_RADIUS_M, 0.0) / v
+            if required_s > limit - drive_s:
+                where = name if isinstance(name, str) else f"[{x:g}, {y:g}]"
+                raise self.report.error(
+                    [*at, key],
+                    required_s,
+                    f"at most {math.floor(limit - drive_s):d} s: phases.beach_operations.time_limit_s "
+                    f"({limit:g} s) less the {math.ceil(drive_s):d} s drive from the nearest launch point "
+                    f"to within {STATION_RADIUS_M:g} m of {where} "
+                    f"({near:.0f} m at robot.wheel_speed_mps {v:g})",
+                )
 
     def _robots(self, parts: Parts, per: int, n: int, what: str, count: int) -> None:
         if per * n > count:

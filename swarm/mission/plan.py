@@ -882,7 +882,34 @@ def plan_mission(
         name, bm.name, seed, robots, searches, relay, cm, bm, _source(mission), mission.success.model_dump()
     )
     plan.budget = _budget(mission, plan)
+    plan.budget["stations"] = _station_times(mission, robots, slots, who)
     return plan
+
+
+def _station_times(mission: Mission, robots: list[RobotPlan], slots: list, who: np.ndarray) -> dict:
+    """Each timed station task's points (a surveillance's dwell, a beacon's hold): the time its
+    `robots_per_point` robots are planned to be there (None: never), the time required, and when
+    beach operations end, the simulator's last moment to count it (`swarm.sim.criteria`). recon at
+    a 1800 s limit planned a 1800 s dwell from 24 s on; every run failed it."""
+    out = {}
+    for t, task in enumerate(mission.tasks):
+        required = getattr(task, "dwell_s" if task.type == "surveillance" else "hold_s", None)
+        if task.type not in ("surveillance", "beacon") or required is None:
+            continue
+        label = mission.task_label(t)
+        mine = [j for j, slot in enumerate(slots) if slot.role == task.type and slot.task == label]
+        k = task.robots_per_point
+        etas: list[list[float]] = [[] for _ in task.points]  # `_slots` lays k slots a point, in order
+        for rp, j in zip(robots, who, strict=True):
+            if j in mine:
+                etas[mine.index(j) // k].append(rp.eta_s)
+        out[label] = {
+            "kind": "dwell" if task.type == "surveillance" else "hold",
+            "required_s": float(required),
+            "end_s": float(mission.beach_end_s),
+            "arrivals_s": [sorted(e)[k - 1] if len(e) >= k else None for e in etas],
+        }
+    return out
 
 
 def _budget(mission: Mission, plan: MissionPlan) -> dict:

@@ -137,12 +137,19 @@ def _relay(d: dict) -> dict | None:
     }
 
 
-def _checks(search: list[dict], relay: dict | None, losses: dict | None, criteria: dict) -> list[dict]:
+def _checks(
+    search: list[dict],
+    relay: dict | None,
+    losses: dict | None,
+    criteria: dict,
+    stations: dict | None = None,
+) -> list[dict]:
     """What a plan can hold against the success criteria: each search area's expected detection
     against min_detection_fraction, every relay position staffed and the share of the window
     enough of them are held for the link after the losses (`budget.p_at_least`) against
-    min_relay_connected_fraction, every relay link closing (margin >= 0 dB), and the
-    robots expected back at sea against min_robots_recovered."""
+    min_relay_connected_fraction, every relay link closing (margin >= 0 dB), the share of each
+    surveillance's or beacon's points reached in time for their dwell or hold against its criterion,
+    and the robots expected back at sea against min_robots_recovered."""
     out = []
     target = criteria.get("min_detection_fraction")
     if target is not None:
@@ -192,6 +199,24 @@ def _checks(search: list[dict], relay: dict | None, losses: dict | None, criteri
                 "met": relay["min_margin_db"] >= 0.0,
             }
         )
+    for task, st in (stations or {}).items():
+        target = criteria.get("min_surveillance_fraction" if st["kind"] == "dwell" else "min_beacon_fraction")
+        if target is None or not st["arrivals_s"]:
+            continue
+        # a point reached too late for its dwell or hold cannot be counted in any run
+        left = [None if a is None else st["end_s"] - a for a in st["arrivals_s"]]
+        in_time = [x is not None and x >= st["required_s"] - 1e-9 for x in left]
+        least = min((x for x in left if x is not None), default=0.0)
+        out.append(
+            {
+                "criterion": f"points reached in time for their {st['required_s']:g} s {st['kind']} before "
+                f"beach operations end ({task}; {max(least, 0.0):.0f} s left at the last point reached)",
+                "value": sum(in_time) / len(in_time),
+                "target": target,
+                "unit": "fraction",
+                "met": sum(in_time) / len(in_time) >= target - 1e-12,
+            }
+        )
     wanted = criteria.get("min_robots_recovered") or 0
     if wanted > 0 and losses is not None and losses.get("recovered") is not None:
         fewest = losses["recovered"][0]  # every mine found marked: the fewest back
@@ -229,7 +254,8 @@ def _verdict(checks: list[dict]) -> dict:
 def plan_data(d: dict, date: str | None = None) -> dict:
     """The plan report's numbers (report.json) from a plan's JSON dict (plan.json)."""
     search, relay, losses = _search(d), _relay(d), _losses(d)
-    checks = _checks(search, relay, losses, d.get("criteria") or {})
+    stations = (d.get("budget") or {}).get("stations")
+    checks = _checks(search, relay, losses, d.get("criteria") or {}, stations)
     s = d.get("summary", {})
     return {
         "header": header("plan", d.get("mission"), d.get("map"), d.get("seed"), date),
