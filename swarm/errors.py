@@ -26,6 +26,12 @@ class InputError(SwarmError):
         super().__init__(f"{self.source}: {where}: found {found!r}, expected {expected}")
 
 
+class Infeasible(InputError):
+    """Input whose values are each valid but cannot work together: a swarm too small for its
+    stations, a dwell longer than the time left at its point. Still bad input to a plan (one line,
+    exit 2); a study sweeping into it records the point as infeasible and runs the others."""
+
+
 class FolderBusy(SwarmError):
     """Another process holds the lock on an output folder (`swarm.files.folder_lock`)."""
 

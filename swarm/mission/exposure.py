@@ -282,7 +282,10 @@ def off_plan_driving(
             trips += to_mark
             # over searched ground, clear of the mines found: only those the search missed are left
             inside += to_mark * (1.0 - s.expected_detection)
-        trips_by_task[s.task] = Trips(to_pieces, trips - to_pieces)
+        # only the takers ashore drive to the pieces (each taker's share of trips is what it drives
+        # while there; the marks count only the robots that last already)
+        ashore = [budget.time_ashore(budget.robot_losses(mission, cm, ways[k].exposure)) for k in takers]
+        trips_by_task[s.task] = Trips(to_pieces * float(np.mean(ashore)), trips - to_pieces)
         for k in searchers:
             for c, v in ways[k].track_m.items():
                 metres[c] = metres.get(c, 0.0) + trips * v / track_total

@@ -17,7 +17,8 @@ mission = load_mission("missions/landing.yaml", {"swarm.count": 20, "hazards.sur
    (relative to the mission file) and load; every region a mission names must exist in the map
    with the right kind; points must lie in the map (in the water for a sea launch, on passable
    ground for tasks); and the parts must agree (a clearance before beach operations end, enough
-   robots for each task, a release point the robots can swim from in time).
+   robots for each task, a release point the robots can swim from in time, a dwell or hold robots
+   placed on the beach can drive to in time).
 
 The loaded `Mission` carries what it resolved: `mission.beach_map`, `mission.terrain_library`,
 `mission.robot_params`, `mission.planner_profile`, `mission.resolved("map_path")`.
@@ -26,6 +27,7 @@ The loaded `Mission` carries what it resolved: `mission.beach_map`, `mission.ter
 from __future__ import annotations
 
 import copy
+import math
 import os
 from collections.abc import Mapping, Sequence
 from importlib import resources
@@ -35,7 +37,7 @@ from typing import Any
 from pydantic import ValidationError
 from shapely.geometry import Point
 
-from swarm.errors import InputError
+from swarm.errors import Infeasible, InputError
 from swarm.files import read_yaml
 from swarm.inputs import ABSENT, Parts, child_at, describe, first_error, key_path, kind_of, model_keys
 from swarm.mission.schema import (
@@ -43,6 +45,11 @@ from swarm.mission.schema import (
     Mission,
     SearchTask,
 )
+
+#: A robot watches an observation point or holds a beacon within this distance (m): the simulator's
+#: `swarm.sim.criteria.STATION_RADIUS_M` (the mission layer sits above the simulator).
+STATION_RADIUS_M = 3.0
+
 
 # --- YAML ---------------------------------------------------------------------------------------------
 
@@ -171,6 +178,11 @@ class _Report:
             given = ", ".join(f"{k}={v}" for k, v in self.overrides.items())
             source = f"{self.source} (with {self.overrides_source} {given})"
         return InputError(source, key_path(parts), found, expected)
+
+    def infeasible(self, parts: Sequence[str | int], found: object, expected: str) -> Infeasible:
+        """`error` for values that are each valid but do not fit together (`Infeasible`)."""
+        e = self.error(parts, found, expected)
+        return Infeasible(e.source, e.where, e.found, e.expected)
 
 
 def _display(path: Path) -> str:
@@ -330,7 +342,7 @@ class _References:
             self.place(["launch", "points", i], p, ("launch",), ground, why)
         reach_m = m.phases.sea_transit.time_limit_s * m.robot.swim_speed_mps
         if sea and launch.release_offshore_m > reach_m:
-            raise err(
+            raise self.report.infeasible(
                 ["launch", "offshore_m"] if launch.offshore_m is not None else ["launch", "platform"],
                 launch.offshore_m if launch.offshore_m is not None else launch.platform,
                 f"a release point the robots can swim from in time: at most {reach_m:g} m offshore "
@@ -345,6 +357,7 @@ class _References:
             )
 
         # tasks
+        held = _stations(m)
         names: dict[str, int] = {}
         for t, task in enumerate(m.tasks):
             at: Parts = ["tasks", t]
@@ -357,7 +370,7 @@ class _References:
                     self.region([*at, "zones", i], zone, ("landing_zone",))
                     if task.zones.index(zone) != i:
                         raise err([*at, "zones", i], zone, "each landing zone once")
-                self._robots([*at, "robots_per_zone"], task.robots_per_zone, len(task.zones), "zones", count)
+                self._robots([*at, "robots_per_zone"], t, held, count)
             elif task.type == "search":
                 self._search(at, task, count, m.beach_end_s)
             elif task.type == "relay":
@@ -365,44 +378,41 @@ class _References:
                 for i, sink in enumerate(task.sinks):
                     self.place([*at, "sinks", i], sink, ("relay_sink",), "land", " (a relay sink)")
             elif task.type == "surveillance":
-                for i, point in enumerate(task.points):
+                xy = [
                     self.place(
                         [*at, "points", i], point, ("observation_point",), "land", " (an observation point)"
                     )
-                self._robots(
-                    [*at, "robots_per_point"], task.robots_per_point, len(task.points), "points", count
-                )
+                    for i, point in enumerate(task.points)
+                ]
+                self._robots([*at, "robots_per_point"], t, held, count)
                 if task.dwell_s > beach_limit:
-                    raise err(
+                    raise self.report.infeasible(
                         [*at, "dwell_s"],
                         task.dwell_s,
                         f"at most phases.beach_operations.time_limit_s ({beach_limit:g} s)",
                     )
+                self._time_at(at, "dwell_s", task.dwell_s, task.points, xy)
             elif task.type == "beacon":
-                for i, point in enumerate(task.points):
+                xy = [
                     self.place([*at, "points", i], point, ("beacon",), "land", " (a beacon)")
-                self._robots(
-                    [*at, "robots_per_point"], task.robots_per_point, len(task.points), "points", count
-                )
+                    for i, point in enumerate(task.points)
+                ]
+                self._robots([*at, "robots_per_point"], t, held, count)
                 if task.hold_s is not None and task.hold_s > beach_limit:
-                    raise err(
+                    raise self.report.infeasible(
                         [*at, "hold_s"],
                         task.hold_s,
                         f"at most phases.beach_operations.time_limit_s ({beach_limit:g} s)",
                     )
+                if task.hold_s is not None:
+                    self._time_at(at, "hold_s", task.hold_s, task.points, xy)
 
         # every station at once: each task fits alone (above), and together they must too
-        held = {
-            t: (len(task.zones) * task.robots_per_zone if task.type == "landing" else
-                len(task.points) * task.robots_per_point)
-            for t, task in enumerate(m.tasks) if task.type in ("landing", "surveillance", "beacon")
-        }  # fmt: skip
-        if sum(held.values()) > count:
-            each = ", ".join(f"tasks[{t}] {n}" for t, n in held.items())
-            raise err(
+        if _total(held) > count:
+            raise self.report.infeasible(
                 ["swarm", "count"],
                 count,
-                f"at least {sum(held.values())}, the robots the stations hold together ({each})",
+                f"at least {_total(held)}, the robots the stations hold together ({_each(held)})",
             )
 
         # hazards
@@ -427,25 +437,70 @@ class _References:
         # success
         rec = m.success.min_robots_recovered
         if rec > count:
-            raise err(["success", "min_robots_recovered"], rec, f"at most swarm.count ({count})")
+            raise self.report.infeasible(
+                ["success", "min_robots_recovered"], rec, f"at most swarm.count ({count})"
+            )
         if rec > 0 and not back.enabled:
             raise err(
                 ["success", "min_robots_recovered"], rec, "0 when phases.return_to_sea.enabled is false"
             )
 
-    def _robots(self, parts: Parts, per: int, n: int, what: str, count: int) -> None:
-        if per * n > count:
-            raise self.report.error(
-                parts,
-                per,
-                f"at most {count // n}: {n} {what} x {per} robots is more than swarm.count ({count})",
+    def _time_at(self, at: Parts, key: str, required_s: float, names: Sequence, xy: list) -> None:
+        """A beach launch's robots start ashore when beach operations start, and no robot drives
+        faster than its wheels turn: a point farther from every launch point than its station
+        radius leaves at most the time limit less that straight drive for its dwell or hold. (A
+        sea launch's way in is the plan's to judge: `swarm.mission.plan`'s station times.) recon
+        at a 1800 s limit passed with a 1800 s dwell, and none of its runs could succeed."""
+        m = self.mission
+        if m.launch.platform != "beach" or not m.launch.points:
+            return
+        limit = m.phases.beach_operations.time_limit_s
+        v = m.robot.wheel_speed_mps
+        launches = [
+            self.place(["launch", "points", i], p, ("launch",)) for i, p in enumerate(m.launch.points)
+        ]
+        for name, (x, y) in zip(names, xy, strict=True):
+            near = min(math.hypot(x - lx, y - ly) for lx, ly in launches)
+            drive_s = max(near - STATION_RADIUS_M, 0.0) / v
+            if required_s > limit - drive_s:
+                where = name if isinstance(name, str) else f"[{x:g}, {y:g}]"
+                raise self.report.infeasible(
+                    [*at, key],
+                    required_s,
+                    f"at most {math.floor(limit - drive_s):d} s: phases.beach_operations.time_limit_s "
+                    f"({limit:g} s) less the {math.ceil(drive_s):d} s drive from the nearest launch point "
+                    f"to within {STATION_RADIUS_M:g} m of {where} "
+                    f"({near:.0f} m at robot.wheel_speed_mps {v:g})",
+                )
+
+    def _robots(self, parts: Parts, t: int, held: dict, count: int) -> None:
+        """Task `t`'s stations alone within the swarm. When one robot a point would fit beside
+        the other stations, its robots per point are too many; when not even that, the swarm is
+        too small, said with what every station holds (recon at 2 robots was told
+        'tasks[1].robots_per_point: found 1, expected at most 0')."""
+        n, per, what = held[t]
+        if per * n <= count:
+            return
+        others = _total(held) - per * n
+        if count - others < n:
+            raise self.report.infeasible(
+                ["swarm", "count"],
+                count,
+                f"at least {_total(held)}, the robots the stations hold together ({_each(held)})",
             )
+        besides = f" less the {others} the other stations hold" if others else ""
+        raise self.report.infeasible(
+            parts,
+            per,
+            f"at most {(count - others) // n}: {_plural(n, what)} x {per} robots is {per * n}, more than "
+            f"swarm.count ({count}){besides}",
+        )
 
     def _search(self, at: Parts, task: SearchTask, count: int, beach_end_s: float) -> None:
         err = self.report.error
         self.region([*at, "area"], task.area, ("search_area",))
         if task.robots is not None and task.robots > count:
-            raise err([*at, "robots"], task.robots, f"at most swarm.count ({count})")
+            raise self.report.infeasible([*at, "robots"], task.robots, f"at most swarm.count ({count})")
         if task.clearance is not None:
             if not task.mark:
                 raise err(
@@ -454,13 +509,39 @@ class _References:
                     "true with a clearance (the robots loitering on the marked mines set them off)",
                 )
             if task.clearance.at_s > beach_end_s:
-                raise err(
+                raise self.report.infeasible(
                     [*at, "clearance", "at_s"],
                     task.clearance.at_s,
                     f"a time before beach operations end, at most {beach_end_s:g} s (the sum of the "
                     "sea_transit, surf_crossing and beach_operations time limits; a beach launch's "
                     "beach_operations alone)",
                 )
+
+
+def _stations(m: Mission) -> dict[int, tuple[int, int, str]]:
+    """Each station task's (points, robots per point, what a point is), by task index."""
+    out = {}
+    for t, task in enumerate(m.tasks):
+        if task.type == "landing":
+            out[t] = (len(task.zones), task.robots_per_zone, "zone")
+        elif task.type in ("surveillance", "beacon"):
+            out[t] = (len(task.points), task.robots_per_point, "point")
+    return out
+
+
+def _total(held: dict[int, tuple[int, int, str]]) -> int:
+    return sum(n * per for n, per, _ in held.values())
+
+
+def _each(held: dict[int, tuple[int, int, str]]) -> str:
+    """'tasks[0] 2 (1 point x 2), tasks[1] 3 (3 points x 1)'."""
+    return ", ".join(
+        f"tasks[{t}] {n * per} ({_plural(n, what)} x {per})" for t, (n, per, what) in held.items()
+    )
+
+
+def _plural(n: int, noun: str) -> str:
+    return f"{n} {noun}{'' if n == 1 else 's'}"
 
 
 def mission_from_dict(

@@ -902,7 +902,34 @@ def plan_mission(
         name, bm.name, seed, robots, searches, relay, cm, bm, _source(mission), mission.success.model_dump()
     )
     plan.budget = _budget(mission, plan)
+    plan.budget["stations"] = _station_times(mission, robots, slots, who)
     return plan
+
+
+def _station_times(mission: Mission, robots: list[RobotPlan], slots: list, who: np.ndarray) -> dict:
+    """Each timed station task's points (a surveillance's dwell, a beacon's hold): the time its
+    `robots_per_point` robots are planned to be there (None: never), the time required, and when
+    beach operations end, the simulator's last moment to count it (`swarm.sim.criteria`). recon at
+    a 1800 s limit planned a 1800 s dwell from 24 s on; every run failed it."""
+    out = {}
+    for t, task in enumerate(mission.tasks):
+        required = getattr(task, "dwell_s" if task.type == "surveillance" else "hold_s", None)
+        if task.type not in ("surveillance", "beacon") or required is None:
+            continue
+        label = mission.task_label(t)
+        mine = [j for j, slot in enumerate(slots) if slot.role == task.type and slot.task == label]
+        k = task.robots_per_point
+        etas: list[list[float]] = [[] for _ in task.points]  # `_slots` lays k slots a point, in order
+        for rp, j in zip(robots, who, strict=True):
+            if j in mine:
+                etas[mine.index(j) // k].append(rp.eta_s)
+        out[label] = {
+            "kind": "dwell" if task.type == "surveillance" else "hold",
+            "required_s": float(required),
+            "end_s": float(mission.beach_end_s),
+            "arrivals_s": [sorted(e)[k - 1] if len(e) >= k else None for e in etas],
+        }
+    return out
 
 
 def _budget(mission: Mission, plan: MissionPlan) -> dict:
@@ -932,6 +959,7 @@ def _budget(mission: Mission, plan: MissionPlan) -> dict:
         default=mission.beach_end_s,
     )
     unseen_blasts = 0.0  # mines expected to go off before any sensor found them
+    holders: list[float] = []  # the relay and spare robots' shares of the window ashore
     # the routes as the robots drive them: stitched around blocked ground, with the simulator's seed
     router = Router(cm, seed=mission.seed)
     driven = dataclasses.replace(plan, robots=[exposure.drivable(rp, router) for rp in plan.robots])
@@ -961,6 +989,8 @@ def _budget(mission: Mission, plan: MissionPlan) -> dict:
             for cause, p in budget.return_losses(mission, cm, home).items():
                 way_back[cause] = way_back.get(cause, 0.0) + still * p
         unseen_blasts += expected["beach"].get("mine", 0.0) * budget.unseen_share(mission, exposed.speed_mps)
+        if rp.role in ("relay", "spare"):  # a spare takes a lost relay's position (`swarm.sim.policy`)
+            holders.append(budget.time_ashore(whole))
         if way.search is not None:
             lost = budget.lost_probability(losses)
             task = way.search.task
@@ -980,7 +1010,7 @@ def _budget(mission: Mission, plan: MissionPlan) -> dict:
                 spare_s[task] = spare_s.get(task, 0.0) + (1.0 - lost) * slack
                 swing = (left / lost * run_s if lost > 0 else 0.0) + slack  # lost against not
             else:  # a reserve, while it lasts
-                spare_s[task] = spare_s.get(task, 0.0) + span * (1.0 - lost / 2.0)
+                spare_s[task] = spare_s.get(task, 0.0) + span * budget.time_ashore(losses)
                 swing = span / 2.0
             swing_s2[task] = swing_s2.get(task, 0.0) + lost * (1.0 - lost) * swing**2
         elif plan.search and rp.role in ("spare", "relay", "surveillance", "beacon"):
@@ -988,7 +1018,7 @@ def _budget(mission: Mission, plan: MissionPlan) -> dict:
             # tracks; a lost station takes one of them from about halfway on
             lost = budget.lost_probability(losses)
             span = max(takeover_end - way.arrive_s, 0.0)
-            pool_s += span * (1.0 - lost / 2.0) if rp.role == "spare" else -lost * span / 2.0
+            pool_s += span * budget.time_ashore(losses) if rp.role == "spare" else -lost * span / 2.0
             pool_s2 += lost * (1.0 - lost) * (span / 2.0) ** 2
     # the spares' time goes to the searches in proportion to the work their losses leave
     orphaned_total = sum(orphaned_s.values())
@@ -1072,21 +1102,32 @@ def _budget(mission: Mission, plan: MissionPlan) -> dict:
             "reserves": s.design["reserves"],
         }
     recovered = None
-    if back.enabled and returning > 0:
+    if back.enabled:  # none back when none is expected to last (no robot sets off: 0, not unknown)
         # the markers the clearance expends do not go back: back at sea as few as when every
         # robot of the team that lasts marks a mine, as many as when only the reserves do. Which
         # of them marks is the policy's call, so the losses on the way (a robot each, at the same
         # rate) are those of as many as set off halfway between: the expected losses, the markers
         # and the robots back at sea, each the middle of its range, add up to the swarm (counting
         # the most that set off put full_conops's return at 3.19 a run where 100 runs lose 2.46)
-        per_returner = sum(way_back.values()) / returning
+        per_returner = sum(way_back.values()) / returning if returning > 0 else 0.0
         least, most = markers
         fewest_off, most_off = max(returning - most, 0.0), max(returning - least, 0.0)
         set_off = (fewest_off + most_off) / 2.0
-        per_phase[budget.RETURN_PHASE] = {c: v * set_off / returning for c, v in way_back.items()}
+        scale = set_off / returning if returning > 0 else 0.0
+        per_phase[budget.RETURN_PHASE] = {c: v * scale for c, v in way_back.items()}
         recovered = [fewest_off * (1.0 - per_returner), most_off * (1.0 - per_returner)]
+    relay = None
+    if plan.relay is not None and len(plan.relay.positions_m):
+        # the link holds while all but redundancy - 1 of its positions are held, by relay robots or
+        # the spares that take a lost one's place; each robot is ashore at a moment of the window
+        # with the chance `time_ashore` (16 robots of relay.yaml: 0.9999; all lost at sea: 0)
+        k = len(plan.relay.positions_m)
+        needed = max(k - (plan.relay.redundancy - 1), 1)
+        relay = {"task": plan.relay.task, "positions": k, "needed": needed}
+        relay["p_held"] = budget.p_at_least(np.array(holders), needed)
     total = sum(sum(c.values()) for c in per_phase.values())
     return {
+        "relay": relay,
         "hazards": budget.hazards_enabled(mission),
         "expected_losses": {p: dict(sorted(c.items())) for p, c in per_phase.items()},
         "expected_lost": total,

@@ -28,6 +28,7 @@ from typing import Annotated, Any
 import pyarrow as pa
 import pyarrow.parquet as pq
 from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic_core import PydanticCustomError
 
 from swarm import files
 from swarm.errors import InputError, SwarmError
@@ -229,17 +230,30 @@ _Count = Annotated[int, Field(ge=0)]
 class _PointEntry(_Written):
     index: int | None = None
     params: dict[str, Any] = {}
+    infeasible: str | None = None  # why the point could not run: no runs, no rate
     runs: _Count
     successes: _Count = 0
-    success_rate: float
-    wilson_low: float
-    wilson_high: float
+    success_rate: float | None
+    wilson_low: float | None
+    wilson_high: float | None
     lost_mean: float | None = None
     losses_by_cause: dict[str, _Count] = {}
     losses_by_phase: dict[str, dict[str, _Count]] = {}
     completed_s: dict[str, float | None] = {}
     runs_for_width: dict[str, _Count | None] = {}  # None: no runs at the point
     more_runs_for_width: dict[str, _Count | None] = {}
+
+    @model_validator(mode="after")
+    def _rated(self) -> _PointEntry:
+        """A point that ran has its rate and interval; only an infeasible one goes without."""
+        if self.infeasible is None:
+            for key in ("success_rate", "wilson_low", "wilson_high"):
+                if getattr(self, key) is None:
+                    # found: None itself (`expected` takes None for "not given")
+                    raise PydanticCustomError(
+                        "expected", "{expected}", {"expected": "a number", "found": None, "key": key}
+                    )
+        return self
 
 
 class _Required(_Written):

@@ -128,6 +128,9 @@ def _relay(d: dict) -> dict | None:
         "relays": len(positions),
         # robots the plan puts on a relay position: fewer than positions when the swarm is too small
         "staffed": sum(1 for robot in d.get("robots", []) if robot.get("role") == "relay"),
+        # the share of the window enough positions are expected held for the link, after the
+        # losses (plan.json's budget; None for a plan without one)
+        "held_after_losses": ((d.get("budget") or {}).get("relay") or {}).get("p_held"),
         "max_hop_m": r.get("max_hop_m"),
         "min_margin_db": None if r.get("min_margin_db") is None else round(float(r["min_margin_db"]), 1),
         "fixed_height_m": r.get("fixed_height_m"),
@@ -137,10 +140,19 @@ def _relay(d: dict) -> dict | None:
     }
 
 
-def _checks(search: list[dict], relay: dict | None, losses: dict | None, criteria: dict) -> list[dict]:
+def _checks(
+    search: list[dict],
+    relay: dict | None,
+    losses: dict | None,
+    criteria: dict,
+    stations: dict | None = None,
+) -> list[dict]:
     """What a plan can hold against the success criteria: each search area's expected detection
-    against min_detection_fraction, every relay link closing (margin >= 0 dB), and the robots
-    expected back at sea against min_robots_recovered."""
+    against min_detection_fraction, every relay position staffed and the share of the window
+    enough of them are held for the link after the losses (`budget.p_at_least`) against
+    min_relay_connected_fraction, every relay link closing (margin >= 0 dB), the share of each
+    surveillance's or beacon's points reached in time for their dwell or hold against its criterion,
+    and the robots expected back at sea against min_robots_recovered."""
     out = []
     target = criteria.get("min_detection_fraction")
     if target is not None:
@@ -166,6 +178,20 @@ def _checks(search: list[dict], relay: dict | None, losses: dict | None, criteri
                 "met": relay["staffed"] >= relay["relays"],
             }
         )
+    connected = criteria.get("min_relay_connected_fraction")
+    if relay is not None and relay["relays"] and relay.get("held_after_losses") is not None and connected:
+        # robots lost before they reach their positions hold none
+        share = relay["held_after_losses"]
+        out.append(
+            {
+                "criterion": "share of the time the relay's positions are held after losses"
+                f" ({relay['task']})",
+                "value": share,
+                "target": connected,
+                "unit": "fraction",
+                "met": share >= connected - 1e-12,
+            }
+        )
     if relay is not None and relay["min_margin_db"] is not None:
         out.append(
             {
@@ -174,6 +200,24 @@ def _checks(search: list[dict], relay: dict | None, losses: dict | None, criteri
                 "target": 0.0,
                 "unit": "dB",
                 "met": relay["min_margin_db"] >= 0.0,
+            }
+        )
+    for task, st in (stations or {}).items():
+        target = criteria.get("min_surveillance_fraction" if st["kind"] == "dwell" else "min_beacon_fraction")
+        if target is None or not st["arrivals_s"]:
+            continue
+        # a point reached too late for its dwell or hold cannot be counted in any run
+        left = [None if a is None else st["end_s"] - a for a in st["arrivals_s"]]
+        in_time = [x is not None and x >= st["required_s"] - 1e-9 for x in left]
+        least = min((x for x in left if x is not None), default=0.0)
+        out.append(
+            {
+                "criterion": f"points reached in time for their {st['required_s']:g} s {st['kind']} before "
+                f"beach operations end ({task}; {max(least, 0.0):.0f} s left at the last point reached)",
+                "value": sum(in_time) / len(in_time),
+                "target": target,
+                "unit": "fraction",
+                "met": sum(in_time) / len(in_time) >= target - 1e-12,
             }
         )
     wanted = criteria.get("min_robots_recovered") or 0
@@ -213,7 +257,8 @@ def _verdict(checks: list[dict]) -> dict:
 def plan_data(d: dict, date: str | None = None) -> dict:
     """The plan report's numbers (report.json) from a plan's JSON dict (plan.json)."""
     search, relay, losses = _search(d), _relay(d), _losses(d)
-    checks = _checks(search, relay, losses, d.get("criteria") or {})
+    stations = (d.get("budget") or {}).get("stations")
+    checks = _checks(search, relay, losses, d.get("criteria") or {}, stations)
     s = d.get("summary", {})
     return {
         "header": header("plan", d.get("mission"), d.get("map"), d.get("seed"), date),

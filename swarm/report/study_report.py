@@ -196,6 +196,8 @@ def study_rows(summary: dict) -> list[list[str]]:
     confidence = summary.get("confidence", 0.95)
     target = _number(summary.get("target"))
     head = keys or ["point"]
+    # a point that could not run says why, in a last column there only when one could not
+    why = any(p.get("infeasible") for p in summary.get("points") or [])
     rows = [
         [
             *head,
@@ -210,6 +212,7 @@ def study_rows(summary: dict) -> list[list[str]]:
             *found,
             *(title for _, title in ends),
             f"runs for ±{WIDTH:g}",
+            *(["infeasible"] if why else []),
         ]
     ]
     for p in summary.get("points") or []:
@@ -241,6 +244,7 @@ def study_rows(summary: dict) -> list[list[str]]:
                 ),
                 *(_fmt(p.get(key), ".2f") for key, _ in ends),
                 MISSING if needed is None else f"{needed:.0f}",
+                *([p.get("infeasible") or ""] if why else []),
             ]
         )
     return rows
@@ -296,7 +300,8 @@ def figures(
     table: pa.Table, summary: dict, beach_map: BeachMap | None
 ) -> list[tuple[str, bytes | None, str]]:
     """(heading, PNG or None, what to say when it is None) of every figure, in report order."""
-    return [(f.heading, f.make(), f.absent) for f in _figures(table, summary, beach_map)]
+    ran = [p for p in summary.get("points") or [] if not p.get("infeasible")]
+    return [(f.heading, f.make(), f.absent) for f in _figures(table, {**summary, "points": ran}, beach_map)]
 
 
 def _figures(
@@ -405,7 +410,8 @@ def study_report(
     losses = loss_rows(data)
     if losses:
         blocks.append(Table("Losses by cause and phase, all runs", losses))
-    blocks += _figures(table, summary, beach_map, no_map)
+    ran = [p for p in summary.get("points") or [] if not p.get("infeasible")]
+    blocks += _figures(table, {**summary, "points": ran}, beach_map, no_map)
     h = data["header"]
     return Report(
         "study",

@@ -145,8 +145,13 @@ def evaluate_plan(
                 "wilson_high": p["wilson_high"],
             }
             for p in qs["points"]
+            if not p.get("infeasible")
         ]
-        met = [p["params"]["swarm.count"] for p in qs["points"] if p["success_rate"] >= target]
+        met = [
+            p["params"]["swarm.count"]
+            for p in qs["points"]
+            if p["success_rate"] is not None and p["success_rate"] >= target
+        ]
         result["suggested_count"] = min(met) if met else None
     write_text_atomic(Path(out) / EVALUATION_FILE, json.dumps(result, indent=1, sort_keys=True) + "\n")
     return result

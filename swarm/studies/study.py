@@ -27,7 +27,7 @@ from swarm.files import folder_lock, write_text_atomic
 from swarm.studies import backends, stats
 from swarm.studies.runner import RunTask, run_seed
 from swarm.studies.store import ResultStore
-from swarm.studies.sweep import Sweep, check_points, points
+from swarm.studies.sweep import Sweep, feasibility, points
 from swarm.studies.table import param_cell, param_column, param_type, schema
 
 #: Interval half-widths (±) the summary says how many runs would reach.
@@ -48,6 +48,8 @@ class StudySpec:
     seed: int = 0
     target: float = 0.95
     confidence: float = 0.95
+    #: points that cannot run, by index: the loader's line on why (`sweep.feasibility`); no runs
+    infeasible: dict[int, str] = field(default_factory=dict, compare=False)
 
     def __post_init__(self) -> None:
         if self.runs < 1:
@@ -63,6 +65,8 @@ class StudySpec:
         kinds = {s.key: param_type(s.values) for s in self.sweeps}
         out = []
         for p, overrides in enumerate(self.points()):
+            if p in self.infeasible:
+                continue
             items = tuple(overrides.items())
             cells = tuple((param_column(k), param_cell(v, kinds[k])) for k, v in items)
             for r in range(self.runs):
@@ -106,7 +110,8 @@ def run_study(
         raise SwarmError(f"study: batch must be >= 1, found {batch}")
     at_once = (workers or backends.default_workers()) if backend == "local" else 1
     # the swept values as the schema reads them: an integer key's 10.0 is 10 in every output
-    spec = replace(spec, sweeps=check_points(spec.mission_path, spec.sweeps, at_once=at_once))
+    sweeps, infeasible = feasibility(spec.mission_path, spec.sweeps, at_once=at_once)
+    spec = replace(spec, sweeps=sweeps, infeasible=infeasible)
     with folder_lock(out):
         return _run_locked(spec, Path(out), backend, workers, address, progress, batch)
 
@@ -131,7 +136,7 @@ def _run_locked(
         raise
     done = store.done()
     tasks = [t for t in spec.tasks() if (t.point, t.run) not in done]
-    total = len(spec.points()) * spec.runs
+    total = (len(spec.points()) - len(spec.infeasible)) * spec.runs
     if progress is not None:
         progress(total - len(tasks), total)
     n_workers = workers or backends.default_workers()
@@ -214,19 +219,22 @@ def summarize(spec: StudySpec, table: pa.Table) -> dict:
         low, high = stats.wilson_interval(k, n, spec.confidence) if n else (0.0, 1.0)
         rate = k / n if n else float("nan")
         by_cause, by_phase = _loss_counts(losses[i] for i in mine)
+        why = spec.infeasible.get(p)
         out_points.append(
             {
                 "index": p,
                 "params": params,
+                # why the point cannot run (None: it ran): no runs, no rate (null in summary.json)
+                "infeasible": why,
                 "runs": n,
                 "successes": k,
-                "success_rate": rate,
-                "wilson_low": low,
-                "wilson_high": high,
+                "success_rate": None if why else rate,
+                "wilson_low": None if why else low,
+                "wilson_high": None if why else high,
                 "completed_s": stats.distribution(completed[mine]),
                 "losses_by_cause": by_cause,
                 "losses_by_phase": by_phase,
-                "lost_mean": float(np.mean([len(losses[i]) for i in mine])) if n else 0.0,
+                "lost_mean": float(np.mean([len(losses[i]) for i in mine])) if n else None if why else 0.0,
                 "lost_interval": _count_interval(
                     [len(losses[i]) for i in mine], spec.confidence, max((robots[i] for i in mine), default=0)
                 ),
@@ -323,11 +331,16 @@ def _required(spec: StudySpec, pts: list[dict]) -> dict | None:
     value = answer.value
     if value is not None and numeric[0].is_integer:
         value = int(value)
+    note = answer.note
+    held = [pt for pt in pts if all(pt["params"][k] == v for k, v in fixed.items())]
+    skipped = [f"{key} = {pt['params'][key]} ({pt['infeasible']})" for pt in held if pt.get("infeasible")]
+    if skipped:  # not run, so not among the values the answer could be
+        note = "; ".join(filter(None, [note, f"not run, infeasible: {'; '.join(skipped)}"]))
     return {
         "key": key,
         "value": value,
         "target": spec.target,
         "confidence": spec.confidence,
         "held": fixed,
-        "note": answer.note,
+        "note": note,
     }

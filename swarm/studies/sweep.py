@@ -6,7 +6,8 @@ VALUES is a list, ``0.5,1,2``, or an inclusive range ``start:stop:step`` (``10:6
 as the schema reads its key (`check_points`: an integer key's ``10.0`` is 10, ``10.5`` an error).
 KEY is a dotted key path of the mission schema, as `--set` and `parallel_env(overrides=...)` take
 (`swarm.mission.load.apply_overrides`). Every point is checked against the schema before a single
-run starts, so a bad key or value is one line naming it.
+run starts, so a bad key or value is one line naming it; a point whose values do not work
+together is reported as infeasible and the others run (`feasibility`).
 """
 
 from __future__ import annotations
@@ -17,7 +18,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-from swarm.errors import InputError
+from swarm.errors import Infeasible, InputError
 from swarm.files import parse_yaml
 
 #: A range may not expand to more values than this (a typo like 1:1000000:1 is refused).
@@ -114,9 +115,22 @@ def points(sweeps: Sequence[Sweep]) -> list[dict[str, object]]:
 
 
 def check_points(mission_path: str | Path, sweeps: Sequence[Sweep], at_once: int = 1) -> list[Sweep]:
+    """The sweeps of `feasibility`, as the schema reads their values."""
+    return feasibility(mission_path, sweeps, at_once)[0]
+
+
+def feasibility(
+    mission_path: str | Path, sweeps: Sequence[Sweep], at_once: int = 1
+) -> tuple[list[Sweep], dict[int, str]]:
     """Load the mission at every point (keys exist, values are valid), so a bad sweep fails before
     any run: `--sweep swarm.count: found -5, expected ...` (one line, naming the key); and refuse a
     point whose `at_once` runs in parallel would not fit in memory (`swarm.sim.memory`).
+
+    A point whose values are each valid but do not work together (`Infeasible`: recon at 2 robots
+    for stations that hold 5) is no mistake in a sweep but one of its answers: it is returned,
+    by point index, with the loader's line (without the file's name), and the other points run.
+    A sweep with no feasible point is the first point's error (`swarm study missions/recon.yaml
+    --sweep swarm.count=2,8` stopped the whole study on 2).
 
     Returns the sweeps with their values as the schema reads them, as it reads one `--set`: an
     integer key swept over 8,10.0 is swept over 8 and 10 (the float went into the table, the
@@ -125,18 +139,28 @@ def check_points(mission_path: str | Path, sweeps: Sequence[Sweep], at_once: int
     from swarm.sim.memory import check_fits
 
     read: dict[tuple[str, str], object] = {}
-    for point in points(sweeps):
-        mission = load_mission(mission_path, point, overrides_source="--sweep")
+    infeasible: dict[int, str] = {}
+    first: Infeasible | None = None
+    for p, point in enumerate(points(sweeps)):
+        try:
+            mission = load_mission(mission_path, point, overrides_source="--sweep")
+        except Infeasible as exc:
+            first = first or exc
+            infeasible[p] = f"{exc.where}: found {exc.found!r}, expected {exc.expected}"
+            continue
         check_fits(mission, at_once=at_once)
         for key, value in point.items():
             if (key, repr(value)) not in read:
                 read[key, repr(value)] = _as_read(value, value_at(mission, key))
-    typed = [Sweep(s.key, tuple(read[s.key, repr(v)] for v in s.values)) for s in sweeps]
+    if first is not None and len(infeasible) == len(points(sweeps)):
+        raise first
+    # a value only infeasible points take stays as written
+    typed = [Sweep(s.key, tuple(read.get((s.key, repr(v)), v) for v in s.values)) for s in sweeps]
     for given, sweep in zip(sweeps, typed, strict=True):
         if len(set(map(repr, sweep.values))) != len(sweep.values):
             found = ",".join(map(str, given.values))
             raise InputError("command line", f"--sweep {sweep.key}", found, "values without repeats")
-    return typed
+    return typed, infeasible
 
 
 def _as_read(given: object, read: object) -> object:

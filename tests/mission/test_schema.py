@@ -463,7 +463,7 @@ def test_parts_must_agree(monkeypatch):
     raw["tasks"][0]["robots_per_zone"] = 4
     raw["tasks"].append({**raw["tasks"][0], "name": "second_wave"})
     err = error_of(raw, monkeypatch)
-    together = "at least 16, the robots the stations hold together (tasks[0] 8, tasks[2] 8)"
+    together = "at least 16, the robots the stations hold together (tasks[0] 8 (2 zones x 4), tasks[2] 8 ("
     assert_line(err, "swarm.count", 12, together)
     raw = small_mission()
     raw["launch"]["offshore_m"] = 5000.0
@@ -477,6 +477,34 @@ def test_parts_must_agree(monkeypatch):
     assert_line(
         error_of(raw, monkeypatch), "tasks[1].sensor", "both", "exactly one of sweep_width_m or lateral_range"
     )
+
+
+def test_a_swarm_too_small_for_its_stations_says_what_they_hold(monkeypatch):
+    """recon at 2 robots was told 'tasks[1].robots_per_point: found 1, expected at most 0': with
+    not even a robot for each point beside the other stations, the count is what is short, and the
+    line says what each station task holds. Robots per point are blamed only when fewer would fit,
+    less what the other stations hold. Both are infeasible, not malformed (a study runs on)."""
+    from swarm.errors import Infeasible
+
+    recon = REPO / "missions" / "recon.yaml"
+    for count in (1, 2, 4):
+        with pytest.raises(Infeasible) as info:
+            load_mission(recon, {"swarm.count": count}, overrides_source="--set")
+        err = info.value
+        assert err.where == "swarm.count" and err.found == count
+        assert err.expected == (
+            "at least 5, the robots the stations hold together "
+            "(tasks[0] 2 (1 point x 2), tasks[1] 3 (3 points x 1))"
+        )
+    load_mission(recon, {"swarm.count": 5})
+    with pytest.raises(Infeasible) as info:
+        load_mission(recon, {"swarm.count": 8, "tasks.0.robots_per_point": 10})
+    err = info.value
+    assert err.where == "tasks[0].robots_per_point" and err.found == 10
+    assert err.expected.startswith(
+        "at most 5: 1 point x 10 robots is 10, more than swarm.count (8) less the 3"
+    )
+    load_mission(recon, {"swarm.count": 8, "tasks.0.robots_per_point": 5})
 
 
 def test_file_errors(tmp_path):

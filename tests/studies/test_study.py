@@ -322,6 +322,7 @@ def test_sweeps_parse_lists_and_ranges() -> None:
         ("hazards.surf.wave_height_m=1,big", "hazards.surf.wave_height_m"),
         ("swarm.count=2,3.5", "swarm.count: found 3.5, expected a whole number"),  # as --set says
         ("swarm.count=3,3.0", "swarm.count: found '3,3.0', expected values without repeats"),
+        ("swarm.count=1", "tasks[0].robots_per_zone: found 2, expected at most 1"),  # no point can run
     ],
 )
 def test_a_bad_sweep_is_one_line_naming_the_key(tiny, tmp_path, sweep, names) -> None:
@@ -375,6 +376,37 @@ def test_any_value_a_mission_takes_can_be_swept_and_held(tiny, tmp_path) -> None
     points = json.loads((out / "summary.json").read_text())["points"]
     assert [p["params"]["launch.points"] for p in points] == [["launch_1"]] * 2 + [["launch_2"]] * 2
     assert (out / "report.html").is_file()
+
+
+def test_an_infeasible_point_is_reported_and_the_others_run(tiny, tmp_path) -> None:
+    """`swarm study missions/recon.yaml --sweep swarm.count=2,8` stopped on 2 (its stations hold 5):
+    a point whose values do not fit together runs no run, says why in summary.json and the point
+    table, and is not among the sizes the answer can be; the rest of the sweep runs."""
+    out = tmp_path / "study"
+    printed = io.StringIO()
+    argv = ["study", str(tiny), "--runs", "3", "--sweep", "swarm.count=1,3", "--target", "0.2"]
+    with contextlib.redirect_stderr(io.StringIO()), contextlib.redirect_stdout(printed):
+        assert main([*argv, "--workers", "1", "--out", str(out)]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    one, three = summary["points"]
+    assert "tasks[0].robots_per_zone: found 2, expected at most 1" in one["infeasible"]
+    assert one["runs"] == 0 and one["success_rate"] is None and one["lost_mean"] is None
+    assert three["infeasible"] is None and three["runs"] == 3
+    assert summary["runs"] == 3
+    table = pq.read_table(out / "results.parquet")
+    assert table.num_rows == 3 and set(table.column("swarm.count").to_pylist()) == {3}
+    required = summary["required"]
+    low, _ = wilson_interval(three["successes"], 3, 0.95)
+    assert required["value"] == (3 if low >= 0.2 else None)  # never the infeasible 1
+    assert "not run, infeasible: swarm.count = 1 (tasks[0].robots_per_zone" in required["note"]
+    text = printed.getvalue()
+    assert "infeasible" in text and "expected at most 1" in text
+    # the report reads it back, the reason in the point table's last column
+    md = tmp_path / "report.md"
+    with contextlib.redirect_stdout(io.StringIO()):
+        assert main(["report", str(out), "-o", str(md)]) == 0
+    rows = [line for line in md.read_text().splitlines() if line.startswith("| 1 |")]
+    assert len(rows) == 1 and "expected at most 1" in rows[0]
 
 
 def test_a_column_holds_its_sweep_s_values_as_arrow_types_them() -> None:
