@@ -41,7 +41,7 @@ def _mission(mtbf_h: float, **success: float):
                 "type": "relay",
                 "source": "relay_source",
                 "sinks": ["relay_sink"],
-                "radio": {"tx_power_dbm": -10.0, "source_antenna_height_m": 2.5},
+                "radio": {"tx_power_dbm": -10.0, "source_antenna_height_m": 0.7},  # relays needed
             },
             {"type": "search", "area": "search_beach", "sensor": {"sweep_width_m": 5.0}, "robots": 3},
         ],
@@ -76,7 +76,7 @@ def test_every_robot_lost_on_the_swim_leaves_nothing_to_expect(plans) -> None:
     assert gone["expected_recovered"] == [0.0, 0.0]  # none back: a number, not unknown
     (kept,) = lasting["search"].values()
     assert kept["expected_detection_after_losses"] > 0.05
-    assert lasting["relay"]["p_held"] > 0.99
+    assert lasting["relay"]["p_held"] > 0.95  # what the breakers leave
     assert lasting["expected_recovered"][0] > 1.0
 
 

@@ -263,19 +263,21 @@ def test_link_margins_follow_the_link_budget(plan, mission):
 def test_plan_verdicts(plan):
     data = json.loads(plan_json(plan))
     detection = data["budget"]["search"]["search_1"]["expected_detection_after_losses"]
-    # two searchers and a minute on the beach: the plan cannot promise much, judge it against 5%
-    assert detection < 0.5
-    # robots failing every 3 minutes on average hold the one relay position only part of the time
+    # two searchers (one stranded in the surf by its 60 s limit, as in simulation) and a minute on
+    # the beach: the plan cannot promise much, judge it against 1%
+    assert 0.01 < detection < 0.5
+    # robots failing every 3 minutes on average (and some stranded in the surf) hold the one relay
+    # position only part of the time
     held = data["budget"]["relay"]["p_held"]
-    assert 0.5 < held < 0.9
+    assert 0.3 < held < 0.9
     low = {
         **data,
-        "criteria": {**data["criteria"], "min_detection_fraction": 0.05, "min_relay_connected_fraction": 0.5},
+        "criteria": {**data["criteria"], "min_detection_fraction": 0.01, "min_relay_connected_fraction": 0.3},
     }
     met = plan_data(low)["verdict"]
     assert met["status"] == "met" and met["text"].startswith("PLAN MEETS")
-    assert f"expected detection after losses (search_1) {detection:.1%} >= 5.0%" in met["text"]
-    assert f"held after losses (relay_1) {held:.1%} >= 50.0%" in met["text"]
+    assert f"expected detection after losses (search_1) {detection:.1%} >= 1.0%" in met["text"]
+    assert f"held after losses (relay_1) {held:.1%} >= 30.0%" in met["text"]
     unheld = {**low, "criteria": {**low["criteria"], "min_relay_connected_fraction": 0.9}}
     assert plan_data(unheld)["verdict"]["status"] == "not met"
     short = plan_data({**data, "criteria": {"min_detection_fraction": 0.999}})["verdict"]
