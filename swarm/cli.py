@@ -757,7 +757,13 @@ def _cmd_plan(args: argparse.Namespace) -> int:
     from swarm.mission import load_mission
     from swarm.mission.plan import plan_mission, write_plan
     from swarm.report.document import today
-    from swarm.report.plan_report import against_plan, robots_range, summary_rows, write_plan_report
+    from swarm.report.plan_report import (
+        against_plan,
+        robots_range,
+        summary_rows,
+        verdict_brief,
+        write_plan_report,
+    )
     from swarm.sim.memory import check_fits
     from swarm.studies.sweep import check_study_size
 
@@ -816,6 +822,7 @@ def _cmd_plan(args: argparse.Namespace) -> int:
                 )
             paths[EVALUATION_FILE] = out / EVALUATION_FILE
         paths.update(write_plan_report(plan, out, date=today(), evaluation=evaluation))
+        verdict = json.loads(paths["report.json"].read_text())["verdict"]
         print(f"plan for {plan.mission} on {plan.map}, seed {plan.seed}")
         rows = summary_rows(plan)
         width = max(len(k) for k, _ in rows)
@@ -855,6 +862,7 @@ def _cmd_plan(args: argparse.Namespace) -> int:
             if evaluation.get("runs_needed"):
                 said.append(f"about {evaluation['runs_needed']} runs would show it")
             print(f"  {'in simulation'.ljust(width)}  " + "; ".join(said))
+        print(f"  {'verdict'.ljust(width)}  {verdict_brief(verdict)}")
         print(f"wrote {', '.join(p.name for p in paths.values())} in {out}")
         return 0
 

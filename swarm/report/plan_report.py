@@ -254,6 +254,16 @@ def _verdict(checks: list[dict]) -> dict:
     return verdict(f"{lead}: {'; '.join(parts)}", "met" if met else "not met", checks=checks)
 
 
+def verdict_brief(v: dict) -> str:
+    """The verdict in a line for the terminal: what falls short, or that the plan meets what it can
+    check (the report lists every check)."""
+    if v["status"] == "met":
+        return v["text"].split(":")[0]
+    if v["status"] == "none":
+        return v["text"]
+    return _verdict([c for c in v["checks"] if not c["met"]])["text"]
+
+
 def plan_data(d: dict, date: str | None = None) -> dict:
     """The plan report's numbers (report.json) from a plan's JSON dict (plan.json)."""
     search, relay, losses = _search(d), _relay(d), _losses(d)

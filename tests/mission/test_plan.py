@@ -211,6 +211,24 @@ def test_cli_writes_files(tmp_path, capsys):
     assert {"route", "region"} <= layers
     printed = capsys.readouterr().out
     assert "landing" in printed and str(out) in printed
+    # the verdict is printed, as the report has it (landing's checks are met)
+    verdict = json.loads((out / "report.json").read_text())["verdict"]
+    assert verdict["status"] == "met"
+    assert "  verdict  " in printed and "PLAN MEETS the criteria a plan can check\n" in printed
+
+
+def test_cli_prints_what_falls_short(tmp_path, capsys):
+    """A plan that falls short says which checks fail on the terminal, not only in report.md."""
+    out = tmp_path / "short"
+    relay = REPO / "missions" / "relay.yaml"  # 8 robots hold its 8 positions too rarely after losses
+    assert main(["plan", str(relay), "--set", "swarm.count=8", "--out", str(out), "--workers", "1"]) == 0
+    printed = capsys.readouterr().out
+    checks = json.loads((out / "report.json").read_text())["verdict"]["checks"]
+    met, unmet = [c for c in checks if c["met"]], [c for c in checks if not c["met"]]
+    assert met and unmet
+    (line,) = [x for x in printed.splitlines() if x.strip().startswith("verdict")]
+    assert "PLAN FALLS SHORT: " in line
+    assert all(c["criterion"] in line for c in unmet) and not any(c["criterion"] in line for c in met)
 
 
 def test_cli_bad_mission_exits_2(tmp_path, capsys):
