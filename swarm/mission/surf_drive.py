@@ -17,7 +17,8 @@ it) from its launch point with the simulator's own rules, reduced to one robot w
 the forces of `swarm.sim.physics` (as `surf_speed.mean_speed`, now on the world frame and the
 cell under the robot at each substep), the controller of `swarm.sim.control` (pure pursuit for a
 point `LOOKAHEAD_M` ahead on the leg, yaw rate by the heading error, the jet by its cosine) and
-the route follower of `swarm.sim.routes`, at `WAVE_PHASES` phases of the wave spread over a period
+the route follower of `swarm.sim.routes` (on the gains and radii of `swarm.robot.driving`,
+which the simulator imports too), at `WAVE_PHASES` phases of the wave spread over a period
 (each run draws its own, uniformly). A drive ends when the wheels ground (`GROUND_SUBMERSION`,
 where the simulator's surf phase ends) or when its time in the surf zone passes the limit: the
 share of phases that pass it is the plan's chance of a `surf_timeout`. A breaker of the local
@@ -35,6 +36,18 @@ import numpy as np
 
 from swarm.mission.schema import Mission
 from swarm.mission.surf_speed import SurfZone
+from swarm.robot.driving import (
+    ARRIVE_M,
+    CAPTURE_M,
+    EFFECTIVE_TRACK_SCALE,
+    FINAL_CAPTURE_M,
+    LOOKAHEAD_M,
+    MAX_WHEEL_SPEED_FACTOR,
+    MAX_YAW_RATE_RADPS,
+    PASS_CROSS_TRACK_M,
+    PIVOT_ERROR_RAD,
+    YAW_GAIN_PER_S,
+)
 from swarm.robot.params import GRAVITY_MPS2
 from swarm.robot.skid import COEFFICIENTS, HEADING, SkidModel, U, V, X, Y
 from swarm.robot.terrain import GROUND_SUBMERSION, JET_SUBMERSION
@@ -45,17 +58,6 @@ from swarm.world.coastal import MIN_DEPTH_M, WAVE_SKEW
 STEP_S, SUBSTEP_S = 0.5, 0.25
 #: Wave phases a way in is driven at, spread evenly over a period.
 WAVE_PHASES = 8
-#: The route follower's (`swarm.sim.routes`): capture radius of a waypoint and of the last one,
-#: the look-ahead along the leg, and how close to a leg's line a robot past its end must be.
-CAPTURE_M, FINAL_CAPTURE_M, LOOKAHEAD_M, PASS_CROSS_TRACK_M = 1.0, 0.3, 1.5, 2.0
-#: The controller's (`swarm.sim.control`): yaw gain (1/s) and largest yaw rate (rad/s), the
-#: heading error it pivots beyond, its stopping distance, and the skid-steer track scale.
-YAW_GAIN_PER_S, MAX_YAW_RATE_RADPS = 1.5, 1.2
-PIVOT_ERROR_RAD = math.radians(60.0)
-ARRIVE_M = 0.25
-EFFECTIVE_TRACK_SCALE = 0.73
-#: The wheels' top surface speed over cruise (`swarm.sim.setup.MAX_WHEEL_SPEED_FACTOR`).
-MAX_WHEEL_SPEED_FACTOR = 1.5
 #: A drive neither ashore nor past the limit after this many limits' time is given up: it swims
 #: outside the surf zone, where no surf time runs (neither ashore nor timed out).
 HORIZON_LIMITS = 4.0

@@ -14,24 +14,20 @@ physics' wheel mapping (physical = -command[:, ::-1]), so the controller's inten
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numba
 import numpy as np
 
+from swarm.robot.driving import (
+    ARRIVE_M,
+    EFFECTIVE_TRACK_SCALE,
+    MAX_YAW_RATE_RADPS,
+    PIVOT_ERROR_RAD,
+    YAW_GAIN_PER_S,
+)
 from swarm.robot.terrain import JET_SUBMERSION
 from swarm.sim.physics_kernels import maximum, minimum
-
-#: Thesis eq. 2.26: the effective track width of the skid-steered robot is d / 0.73.
-EFFECTIVE_TRACK_SCALE = 0.73
-#: Heading error beyond which the robot turns in place before driving on (rad).
-PIVOT_ERROR_RAD = math.radians(60.0)
-#: Yaw-rate gain on the heading error (1/s) and the largest commanded yaw rate (rad/s).
-YAW_GAIN_PER_S = 1.5
-MAX_YAW_RATE_RADPS = 1.2
-#: Within this distance of its target a robot stops (m).
-ARRIVE_M = 0.25
 
 
 @dataclass(frozen=True)

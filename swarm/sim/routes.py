@@ -14,22 +14,11 @@ import math
 import numba
 import numpy as np
 
+from swarm.robot.driving import CAPTURE_M, FINAL_CAPTURE_M, LOOKAHEAD_M, PASS_CROSS_TRACK_M
 from swarm.sim.physics_kernels import maximum, minimum
 
-#: A waypoint counts as reached within this distance (m); the last one of a route, where the
-#: robot stops, within `FINAL_CAPTURE_M` (inside the controller's stopping distance).
-CAPTURE_M = 1.0
-FINAL_CAPTURE_M = 0.3
 #: A side-step's first point lies at least this far from where it leaves the leg (`clear_of`).
 SIDESTEP_CLEAR_M = 1.25 * CAPTURE_M
-#: Pure pursuit: the robot steers for the point this far ahead of its projection on the leg it is
-#: driving (m). Steering for the far end of a 900 m search track instead lets a cross-slope push
-#: carry the robot metres off the track it was planned to sweep; chasing a point on the leg pulls
-#: it back. Long enough that the controller does not slow for it (its slowdown starts at 1 m).
-LOOKAHEAD_M = 1.5
-#: A leg's end counts as passed once the robot is beyond it along the leg and within this distance
-#: of the leg's line (m), so a robot pushed wide of a corner does not circle back for it.
-PASS_CROSS_TRACK_M = 2.0
 
 
 class Routes:

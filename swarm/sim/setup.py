@@ -21,12 +21,11 @@ from swarm.mission.exposure import WayOut
 from swarm.mission.plan import MissionPlan, pickup_points, place_xy, radio_params
 from swarm.mission.schema import Mission, Radio
 from swarm.planning.router import Router
+from swarm.robot.driving import MAX_WHEEL_SPEED_FACTOR
 from swarm.sim import physics
 from swarm.sim.control import DriveLimits
 from swarm.sim.layout import ROLES
 
-#: The largest wheel surface speed, as a multiple of the cruise speed (robot.wheel_speed_mps).
-MAX_WHEEL_SPEED_FACTOR = 1.5
 #: Spares wait on dry ground at least this far from water (m).
 MUSTER_FROM_WATER_M = 5.0
 
