@@ -759,10 +759,10 @@ def _cmd_plan(args: argparse.Namespace) -> int:
     from swarm.report.document import today
     from swarm.report.plan_report import (
         against_plan,
+        plan_report,
         robots_range,
         summary_rows,
         verdict_brief,
-        write_plan_report,
     )
     from swarm.sim.memory import check_fits
     from swarm.studies.sweep import check_study_size
@@ -821,8 +821,8 @@ def _cmd_plan(args: argparse.Namespace) -> int:
                     progress=run_progress,
                 )
             paths[EVALUATION_FILE] = out / EVALUATION_FILE
-        paths.update(write_plan_report(plan, out, date=today(), evaluation=evaluation))
-        verdict = json.loads(paths["report.json"].read_text())["verdict"]
+        report = plan_report(plan, date=today(), evaluation=evaluation)
+        paths.update(report.write_all(out))
         print(f"plan for {plan.mission} on {plan.map}, seed {plan.seed}")
         rows = summary_rows(plan)
         width = max(len(k) for k, _ in rows)
@@ -862,7 +862,7 @@ def _cmd_plan(args: argparse.Namespace) -> int:
             if evaluation.get("runs_needed"):
                 said.append(f"about {evaluation['runs_needed']} runs would show it")
             print(f"  {'in simulation'.ljust(width)}  " + "; ".join(said))
-        print(f"  {'verdict'.ljust(width)}  {verdict_brief(verdict)}")
+        print(f"  {'verdict'.ljust(width)}  {verdict_brief(report.verdict)}")
         print(f"wrote {', '.join(p.name for p in paths.values())} in {out}")
         return 0
 

@@ -529,9 +529,7 @@ def expected_markers(mines: float, p: float, lasting: np.ndarray, *, poisson: bo
     lasting, `lasting`. Independent, so E[min(X, Y)] = sum over k >= 1 of P(X >= k) P(Y >= k): below
     min(E[X], E[Y]) wherever either can fall short of the other (Jensen)."""
     p = min(max(p, 0.0), 1.0)
-    pmf = np.ones(1)
-    for q in np.clip(np.asarray(lasting, np.float64), 0.0, 1.0):
-        pmf = np.convolve(pmf, [1.0 - q, q])
+    pmf = poisson_binomial_pmf(lasting)
     k = np.arange(1, len(pmf))
     if not len(k):
         return 0.0
@@ -540,15 +538,20 @@ def expected_markers(mines: float, p: float, lasting: np.ndarray, *, poisson: bo
     return float(np.sum(found_sf * at_least_lasting))
 
 
+def poisson_binomial_pmf(chances: np.ndarray) -> np.ndarray:
+    """P(exactly k of independent events with probabilities `chances` happen), k = 0 .. len."""
+    pmf = np.ones(1)
+    for q in np.clip(np.asarray(chances, np.float64), 0.0, 1.0):
+        pmf = np.convolve(pmf, [1.0 - q, q])
+    return pmf
+
+
 def p_at_least(chances: np.ndarray, k: int) -> float:
     """P(at least `k` of independent events with probabilities `chances` happen): the Poisson
     binomial's tail. 1 for k <= 0."""
     if k <= 0:
         return 1.0
-    pmf = np.ones(1)
-    for q in np.clip(np.asarray(chances, np.float64), 0.0, 1.0):
-        pmf = np.convolve(pmf, [1.0 - q, q])
-    return float(min(pmf[k:].sum(), 1.0))
+    return float(min(poisson_binomial_pmf(chances)[k:].sum(), 1.0))
 
 
 def expected_excess(mean: float, sd: float) -> float:

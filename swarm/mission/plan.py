@@ -53,7 +53,7 @@ from swarm.planning.batch import plan_many
 from swarm.planning.coverage import boustrophedon, split_tracks, swath_coverage
 from swarm.planning.detection import clip_tracks, drivable_segments
 from swarm.planning.radio import RadioParams, comm_range_m, link_margin_db
-from swarm.planning.relay import plan_relays, standable_grid
+from swarm.planning.relay import plan_relays, relayed_links, standable_grid
 from swarm.planning.router import Router
 
 #: Entry cells up to this much farther from the launch point than the nearest one may be chosen
@@ -142,8 +142,7 @@ class RelayPlanOut:
 
     def relay_hops_m(self) -> np.ndarray:
         """The lengths of the links with a relay robot at one end (not the terminals' direct links)."""
-        relayed = self.edges.max(axis=1) >= self.n_terminals if len(self.edges) else []
-        return self.hop_lengths_m[relayed]
+        return self.hop_lengths_m[relayed_links(self.edges, self.n_terminals)]
 
     @property
     def nodes_m(self) -> np.ndarray:

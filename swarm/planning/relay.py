@@ -168,9 +168,14 @@ class RelayPlan:
     @property
     def min_slack_m(self) -> float:
         """Range left on the longest hop with a relay at one end."""
-        relayed = self.edges.max(axis=1) >= self.n_terminals if len(self.edges) else []
-        hops = self.hop_lengths_m[relayed]
+        hops = self.hop_lengths_m[relayed_links(self.edges, self.n_terminals)]
         return float(self.range_m - hops.max()) if len(hops) else self.range_m
+
+
+def relayed_links(edges: np.ndarray, n_terminals: int) -> np.ndarray:
+    """(e,) bool: the links with a relay robot at one end (not two terminals linked directly)."""
+    e = np.asarray(edges, dtype=np.intp).reshape(-1, 2)
+    return e.max(axis=1, initial=-1) >= n_terminals
 
 
 def terminals_connected(
@@ -623,7 +628,7 @@ def plan_relays(
     all_nodes = np.asarray(nodes)
     e = np.asarray(edges, dtype=np.intp).reshape(-1, 2)
     hops = np.hypot(*(all_nodes[e[:, 0]] - all_nodes[e[:, 1]]).T) if len(e) else np.empty(0)
-    by_robot = e.max(axis=1) >= n_t if len(e) else np.empty(0, dtype=bool)  # not terminal-terminal
+    by_robot = relayed_links(e, n_t)
     plan = RelayPlan(
         terminals_m=terminals,
         positions_m=all_nodes[n_t:].reshape(-1, 2),

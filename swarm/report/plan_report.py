@@ -21,6 +21,7 @@ import numpy as np
 
 from swarm.mission import budget
 from swarm.mission.plan import MissionPlan, detection_to_expect
+from swarm.planning.relay import relayed_links
 from swarm.report import plan_figures as figs
 from swarm.report.document import MISSING, Figure, Report, Table, header, verdict
 from swarm.studies import stats
@@ -135,7 +136,7 @@ def _relay(d: dict) -> dict | None:
         "min_margin_db": None if r.get("min_margin_db") is None else round(float(r["min_margin_db"]), 1),
         "fixed_height_m": r.get("fixed_height_m"),
         # source and sinks in reach of each other on their own masts: linked with no relay
-        "direct_links": sum(1 for a, b in r.get("edges", []) if max(a, b) < 1 + len(sinks)),
+        "direct_links": int(np.sum(~relayed_links(np.array(r.get("edges", [])), 1 + len(sinks)))),
         "links": links,
     }
 
