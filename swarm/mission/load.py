@@ -29,6 +29,7 @@ from __future__ import annotations
 import copy
 import math
 import os
+import re
 from collections.abc import Mapping, Sequence
 from importlib import resources
 from pathlib import Path
@@ -68,7 +69,8 @@ def read_mission_yaml(path: str | Path) -> dict:
 
 
 def _split(key: str) -> list[str]:
-    return key.split(".")
+    """A key path's parts: `tasks.1.robots`, or `tasks[1].robots` as validation errors name it."""
+    return re.sub(r"\[(\d+)\]", r".\1", key).split(".")
 
 
 def apply_overrides(
@@ -77,7 +79,8 @@ def apply_overrides(
     """A copy of the mission mapping `raw` with each dotted key path in `overrides` set to its value.
 
     Paths follow the schema: `swarm.count`, `hazards.surf.wave_height_m`,
-    `tasks.0.sensor.sweep_width_m` (list items by index; a task's keys are those of its type).
+    `tasks.0.sensor.sweep_width_m` (list items by index, also written `tasks[0]` as errors name
+    them; a task's keys are those of its type).
     Sections the file leaves out are created (`hazards.mines.count` on a mission without hazards);
     a key the schema does not have, an index past the end of a list, or a path into a value is an
     `InputError(source, KEY_PATH, found, expected)` naming the key. Values are not checked here:

@@ -1097,6 +1097,8 @@ def _budget(mission: Mission, plan: MissionPlan) -> dict:
             "expected_detection_after_losses": after,
             "p_criterion_met": as_planned,
             "p_criterion_met_after_losses": after_losses,
+            # the probability the tracks were designed to meet the criterion with (the verdict's)
+            "confidence": task.detection_confidence,
             "expected_team_losses": lost_by_task.get(s.task, 0.0),
             "reserves": s.design["reserves"],
         }

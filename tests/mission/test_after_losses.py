@@ -43,7 +43,13 @@ def _mission(mtbf_h: float, **success: float):
                 "sinks": ["relay_sink"],
                 "radio": {"tx_power_dbm": -10.0, "source_antenna_height_m": 0.7},  # relays needed
             },
-            {"type": "search", "area": "search_beach", "sensor": {"sweep_width_m": 5.0}, "robots": 3},
+            {
+                "type": "search",
+                "area": "search_beach",
+                "sensor": {"sweep_width_m": 5.0},
+                "robots": 3,
+                "detection_confidence": 0.75,  # what 3 searchers on a 120 s beach can promise
+            },
         ],
         "success": success,
         "hazards": {"mines": {"count": 3}, "attrition": {"mtbf_h": mtbf_h}},
@@ -93,6 +99,7 @@ def test_the_verdict_of_a_plan_whose_robots_are_all_lost_falls_short_on_each_cou
     failed = {c["criterion"].split(" (")[0] for c in gone["checks"] if not c["met"]}
     assert failed == {
         "expected detection after losses",
+        "P(detection criterion met) after losses",
         "share of the time the relay's positions are held after losses",
         "robots expected back at sea, at least",
     }

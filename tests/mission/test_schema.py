@@ -572,6 +572,10 @@ def test_apply_overrides_copies_and_creates_sections():
     assert out["launch"]["points"] == [[10, 5]]
     out = apply_overrides(raw, {"hazards.immobilization.mode_factors.soft_sand": 8.0})
     assert out["hazards"]["immobilization"]["mode_factors"] == {"soft_sand": 8.0}
+    # a list item as validation errors name it (`tasks[1].robots`) is the same key
+    assert apply_overrides(raw, {"tasks[1].robots": 4, "launch.points[0]": [10, 5]}) == apply_overrides(
+        raw, {"tasks.1.robots": 4, "launch.points.0": [10, 5]}
+    )
 
 
 @pytest.mark.parametrize(
@@ -582,6 +586,7 @@ def test_apply_overrides_copies_and_creates_sections():
         ("hazards.surf.wave_heigth_m", "wave_heigth_m", "a key of hazards.surf (known keys: wave_height_m"),
         ("tasks.5.zones", "5", "an index of an item of tasks (0..1)"),
         ("tasks.one.zones", "one", "an index of an item of tasks (0..1)"),
+        ("tasks[5].zones", "5", "an index of an item of tasks (0..1)"),
         ("tasks.0.area", "area", "a key of tasks.0 (known keys: name, type, zones, robots_per_zone)"),
         ("swarm.count.max", "max", "a path ending at swarm.count (it holds a value, not keys)"),
     ],

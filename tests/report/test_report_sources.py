@@ -270,13 +270,22 @@ def test_plan_verdicts(plan):
     # position only part of the time
     held = data["budget"]["relay"]["p_held"]
     assert 0.3 < held < 0.9
+    # and its chance of meeting its own criterion is judged against what the search asks of it,
+    # here no more than that chance
+    search = data["budget"]["search"]["search_1"]
+    chance = search["p_criterion_met_after_losses"]
+    asks = {**data["budget"], "search": {"search_1": {**search, "confidence": chance}}}
     low = {
         **data,
+        "budget": asks,
         "criteria": {**data["criteria"], "min_detection_fraction": 0.01, "min_relay_connected_fraction": 0.3},
     }
     met = plan_data(low)["verdict"]
     assert met["status"] == "met" and met["text"].startswith("PLAN MEETS")
     assert f"expected detection after losses (search_1) {detection:.1%} >= 1.0%" in met["text"]
+    assert f"P(detection criterion met) after losses (search_1) {chance:.2f} >= {chance:.2f}" in met["text"]
+    assert search["confidence"] == 0.95 > chance  # as planned: short of the default confidence
+    assert plan_data(data)["verdict"]["status"] == "not met"
     assert f"held after losses (relay_1) {held:.1%} >= 30.0%" in met["text"]
     unheld = {**low, "criteria": {**low["criteria"], "min_relay_connected_fraction": 0.9}}
     assert plan_data(unheld)["verdict"]["status"] == "not met"
