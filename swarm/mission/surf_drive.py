@@ -15,14 +15,14 @@ disabled by breakers over the longer stay; the plan counted 0.15 losses in the s
 So the plan drives each robot's way in (its sea leg and ground path, as the simulator's routes have
 it) from its launch point with the simulator's own rules, reduced to one robot with no hazards:
 the forces of `swarm.sim.physics` (as `surf_speed.mean_speed`, now on the world frame and the
-cell under the robot at each substep), the controller of `swarm.sim.control` (pure pursuit for a
-point `LOOKAHEAD_M` ahead on the leg, yaw rate by the heading error, the jet by its cosine) and
-the route follower of `swarm.sim.routes` (on the gains and radii of `swarm.robot.driving`,
-which the simulator imports too), at `WAVE_PHASES` phases of the wave spread over a period
-(each run draws its own, uniformly). A drive ends when the wheels ground (`GROUND_SUBMERSION`,
-where the simulator's surf phase ends) or when its time in the surf zone passes the limit: the
-share of phases that pass it is the plan's chance of a `surf_timeout`. A breaker of the local
-height hits at each crest while the robot is in the surf zone, as `Physics.step` counts them.
+cell under the robot at each substep), and the controller and route follower the simulator calls
+(`swarm.robot.driving`: pure pursuit for a point `LOOKAHEAD_M` ahead on the leg, yaw rate by the
+heading error, the jet by its cosine; the same compiled kernels), at `WAVE_PHASES` phases of the
+wave spread over a period (each run draws its own, uniformly). A drive ends when the wheels ground
+(`GROUND_SUBMERSION`, where the simulator's surf phase ends) or when its time in the surf zone
+passes the limit: the share of phases that pass it is the plan's chance of a `surf_timeout`. A
+breaker of the local height hits at each crest while the robot is in the surf zone, as
+`Physics.step` counts them.
 Left out: the flips (the controller drives an inverted robot through the inverse of the wheel
 mapping, so its way is the same), obstacles (none at sea) and the robot's own losses.
 """
@@ -37,20 +37,15 @@ import numpy as np
 from swarm.mission.schema import Mission
 from swarm.mission.surf_speed import SurfZone
 from swarm.robot.driving import (
-    ARRIVE_M,
-    CAPTURE_M,
-    EFFECTIVE_TRACK_SCALE,
-    FINAL_CAPTURE_M,
-    LOOKAHEAD_M,
     MAX_WHEEL_SPEED_FACTOR,
-    MAX_YAW_RATE_RADPS,
-    PASS_CROSS_TRACK_M,
-    PIVOT_ERROR_RAD,
-    YAW_GAIN_PER_S,
+    DriveLimits,
+    advance_cursors,
+    drive_toward,
+    steer_points,
 )
 from swarm.robot.params import GRAVITY_MPS2
 from swarm.robot.skid import COEFFICIENTS, HEADING, SkidModel, U, V, X, Y
-from swarm.robot.terrain import GROUND_SUBMERSION, JET_SUBMERSION
+from swarm.robot.terrain import GROUND_SUBMERSION
 from swarm.world.coastal import MIN_DEPTH_M, WAVE_SKEW
 
 #: The simulator's env step (`swarm.sim.env.SimConfig.dt_s`): commands, route cursors and the
@@ -114,52 +109,6 @@ class _Cells:
         return row * self.cols + col
 
 
-def _legs(points: np.ndarray, cursor: np.ndarray, xy: np.ndarray):
-    """Each robot's leg (`swarm.sim.routes._leg`): from the waypoint before its cursor to the
-    cursor's (a route's first waypoint: none), its start, unit direction, length, and the robot's
-    position along and across it. `points` (n, m, 2) padded with each route's last point."""
-    idx = np.arange(len(points))
-    prev = np.maximum(cursor - 1, 0)
-    p, q = points[idx, prev], points[idx, cursor]
-    leg = q - p
-    length = np.hypot(leg[:, 0], leg[:, 1])
-    unit = leg / np.maximum(length, 1e-12)[:, None]
-    r = xy - p
-    along = r[:, 0] * unit[:, 0] + r[:, 1] * unit[:, 1]
-    cross = unit[:, 0] * r[:, 1] - unit[:, 1] * r[:, 0]
-    return p, unit, length, along, cross
-
-
-def _advance(points: np.ndarray, ends: np.ndarray, cursor: np.ndarray, xy: np.ndarray) -> None:
-    """`swarm.sim.routes.Routes.advance`: past every waypoint within the capture radius, or past
-    its leg's end and near the leg's line (the last one by its radius alone), a few a step."""
-    idx = np.arange(len(points))
-    for _ in range(4):
-        going = cursor < ends
-        cur = np.minimum(cursor, ends - 1)
-        final = cur == ends - 1
-        gap = points[idx, cur] - xy
-        hit = np.hypot(gap[:, 0], gap[:, 1]) < np.where(final, FINAL_CAPTURE_M, CAPTURE_M)
-        _, _, length, along, cross = _legs(points, cur, xy)
-        hit |= ~final & (length > 0) & (along >= length) & (np.abs(cross) <= PASS_CROSS_TRACK_M)
-        step = going & hit
-        if not step.any():
-            return
-        cursor += step
-
-
-def _steer_points(points: np.ndarray, ends: np.ndarray, cursor: np.ndarray, xy: np.ndarray) -> np.ndarray:
-    """`swarm.sim.routes.steer_point`: `LOOKAHEAD_M` ahead of the robot's projection on its leg,
-    the leg's end when that is nearer; the route's last point once it is done."""
-    idx = np.arange(len(points))
-    cur = np.minimum(cursor, ends - 1)
-    p, unit, length, along, _ = _legs(points, cur, xy)
-    ahead = np.minimum(np.maximum(along, 0.0), length) + LOOKAHEAD_M
-    on_leg = (length > 0) & (ahead < length)
-    out = np.where(on_leg[:, None], p + unit * ahead[:, None], points[idx, cur])
-    return np.where((cursor >= ends)[:, None], points[idx, ends - 1], out)
-
-
 def drive_in(mission: Mission, zone: SurfZone, routes: list[np.ndarray]) -> list[WayIn]:
     """Each route of `routes` (waypoints (k, 2) from the launch point) driven from rest at its
     first point, headed for its second, at `WAVE_PHASES` phases (module docstring), over the
@@ -172,20 +121,25 @@ def drive_in(mission: Mission, zone: SurfZone, routes: list[np.ndarray]) -> list
     jet_max = mission.robot.jet_thrust_n or mission.terrain_library.default_jet_thrust_n(
         mission.robot.swim_speed_mps
     )
-    half = robot.track_width_m / EFFECTIVE_TRACK_SCALE / 2.0
+    limits = DriveLimits(
+        robot.wheel_radius_m, robot.track_width_m, cruise, MAX_WHEEL_SPEED_FACTOR * cruise, jet_max
+    )
     limit = float(mission.phases.surf_crossing.time_limit_s)
     period = float(surf.wave_period_s)
     phases = np.arange(WAVE_PHASES) * period / WAVE_PHASES
+    # the routes flat, as the simulator's `Routes` keeps them: robot i's waypoints [start, end)
     lines = [np.asarray(r, np.float64).reshape(-1, 2) for r in routes for _ in phases]
-    n, m = len(lines), max(len(r) for r in lines)
-    points = np.array([np.vstack([r, np.repeat(r[-1:], m - len(r), axis=0)]) for r in lines])
-    ends = np.array([len(r) for r in lines])
+    n = len(lines)
+    points = np.concatenate(lines)
+    end = np.cumsum([len(r) for r in lines])
+    start = end - [len(r) for r in lines]
+    cursor = start.copy()
     phase = np.tile(phases, len(routes))
     state = np.zeros((n, 6))
-    state[:, X], state[:, Y] = points[:, 0, 0], points[:, 0, 1]
-    first = points[:, min(1, m - 1)] - points[:, 0]
+    state[:, X], state[:, Y] = points[start, 0], points[start, 1]
+    first = points[np.minimum(start + 1, end - 1)] - points[start]
     state[:, HEADING] = np.arctan2(first[:, 1], first[:, 0])
-    cursor = np.zeros(n, np.intp)
+    target, upright = np.empty((n, 2)), np.zeros(n, bool)
     submersion = np.zeros(n)  # the simulator's, until a first step reads the cell
     surf_s, hazard = np.zeros(n), np.zeros(n)
     ashore, timed_out = np.zeros(n, bool), np.zeros(n, bool)
@@ -196,9 +150,10 @@ def drive_in(mission: Mission, zone: SurfZone, routes: list[np.ndarray]) -> list
         live = ~ashore & ~timed_out
         if not live.any():
             break
-        _advance(points, ends, cursor, state[:, :2])
-        omega, jet = _commands(points, ends, cursor, state, submersion, cruise, half, jet_max, robot)
-        omega[~live], jet[~live] = 0.0, 0.0
+        # the simulator's route follower and controller (`World.controller_commands`)
+        advance_cursors(points, start, end, cursor, state[:, :2], live)
+        steer_points(points, start, end, cursor, state[:, :2], target)
+        omega, jet, _ = drive_toward(state, target, cruise, submersion, upright, limits, live)
         for k in range(subs):
             t0 = t + k * SUBSTEP_S
             cell = cells.of(state[:, :2])
@@ -222,27 +177,6 @@ def _shape(t_s: float, phase_s: np.ndarray, period_s: float) -> np.ndarray:
     """The wave shape at `t_s` for each robot's wave phase (`coastal.wave_shape`, vectorized)."""
     phi = 2.0 * np.pi * (t_s - phase_s) / period_s
     return (np.cos(phi) + WAVE_SKEW * np.cos(2.0 * phi)) / (1.0 + WAVE_SKEW)
-
-
-def _commands(points, ends, cursor, state, submersion, cruise, half, jet_max, robot):
-    """Wheel speeds (n, 2) rad/s and jet thrust (n,) N toward each robot's steer point, by the
-    simulator's controller (`swarm.sim.control.drive_toward`)."""
-    target = _steer_points(points, ends, cursor, state[:, :2])
-    d = target - state[:, :2]
-    dist = np.hypot(d[:, 0], d[:, 1])
-    err = (np.arctan2(d[:, 1], d[:, 0]) - state[:, HEADING] + np.pi) % (2.0 * np.pi) - np.pi
-    cos_err = np.cos(err)
-    yaw = np.clip(YAW_GAIN_PER_S * err, -MAX_YAW_RATE_RADPS, MAX_YAW_RATE_RADPS)
-    speed = np.minimum(cruise, 0.1 + 0.5 * dist)
-    forward = np.where(np.abs(err) < PIVOT_ERROR_RAD, speed * cos_err, 0.0)
-    left, right = forward - half * yaw, forward + half * yaw
-    top = MAX_WHEEL_SPEED_FACTOR * cruise
-    scale = np.minimum(1.0, top / np.maximum(np.maximum(np.abs(left), np.abs(right)), 1e-9))
-    moving = dist > ARRIVE_M
-    wheels = np.column_stack([left, right]) * (scale / robot.wheel_radius_m)[:, None]
-    omega = np.where(moving[:, None], wheels, 0.0)
-    jet = np.where(moving & (submersion > JET_SUBMERSION), jet_max * np.maximum(cos_err, 0.0), 0.0)
-    return omega, jet
 
 
 def _substep(model: SkidModel, cells: _Cells, s: np.ndarray, omega, jet, cell, shape) -> np.ndarray:

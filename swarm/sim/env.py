@@ -42,7 +42,7 @@ Actions (`action_mode`):
   and the jet thrust as a fraction of the largest (pushes only where the jet is submerged).
 - "command": Dict(command=Discrete(6), target=Box(2)): `COMMANDS` = follow the planned route, go to
   the target point (straight), loiter, mark the object nearest the target, hold as a relay, return to
-  sea. The built-in controller (`swarm.sim.control`) turns commands into wheel and jet commands.
+  sea. The built-in controller (`swarm.robot.driving`) turns commands into wheel and jet commands.
 Every action of a step is checked before any is applied (`swarm.sim.actions`): a NaN, a wrong
 shape, an unknown agent id or a target off the map is a `SwarmError` naming the agent, and the
 step changes nothing. A robot in `agents` left out of the actions stands still (wheels) or keeps

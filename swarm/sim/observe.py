@@ -19,7 +19,7 @@ import numba
 import numpy as np
 from scipy.spatial import cKDTree
 
-from swarm.sim.control import to_body
+from swarm.robot.driving import to_body
 from swarm.sim.layout import ELEVATION_CLIP_M, ROLES, ObservationLayout
 from swarm.sim.physics_kernels import cell_index, cell_index_inside
 from swarm.sim.runview import FOLLOW, RETURN

@@ -26,6 +26,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
+from swarm.robot.npmath import maximum, minimum, sign
 from swarm.robot.params import GRAVITY_MPS2
 from swarm.robot.skid import SkidModel
 from swarm.robot.skid_run import implicit_velocities
@@ -105,28 +106,6 @@ class Robot(NamedTuple):
             robot.yaw_inertia_kgm2,
             robot.length_m**3 / 32.0,
         )
-
-
-@njit(cache=True, error_model="numpy")
-def maximum(a: float, b: float) -> float:
-    """np.maximum: NaN if either is."""
-    return a if a >= b or a != a else b
-
-
-@njit(cache=True, error_model="numpy")
-def minimum(a: float, b: float) -> float:
-    """np.minimum: NaN if either is."""
-    return a if a <= b or a != a else b
-
-
-@njit(cache=True, error_model="numpy")
-def sign(a: float) -> float:
-    """np.sign: 0 for either zero, NaN for NaN."""
-    if a > 0.0:
-        return 1.0
-    if a < 0.0:
-        return -1.0
-    return 0.0 if a == 0.0 else a
 
 
 @njit(cache=True, error_model="numpy")

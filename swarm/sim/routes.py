@@ -9,13 +9,11 @@ an array whose capacity doubles, so appending is amortized constant time); the o
 
 from __future__ import annotations
 
-import math
-
 import numba
 import numpy as np
 
-from swarm.robot.driving import CAPTURE_M, FINAL_CAPTURE_M, LOOKAHEAD_M, PASS_CROSS_TRACK_M
-from swarm.sim.physics_kernels import maximum, minimum
+from swarm.robot.driving import CAPTURE_M, advance_cursors, leg, steer_points
+from swarm.robot.npmath import maximum, minimum
 
 #: A side-step's first point lies at least this far from where it leaves the leg (`clear_of`).
 SIDESTEP_CLEAR_M = 1.25 * CAPTURE_M
@@ -147,7 +145,7 @@ class Routes:
         """Move the cursors of robots in `mask` past every waypoint they have reached (a few at
         most per step): within the capture radius of it, or past the end of its leg and close to
         the leg's line (the final waypoint only by its radius)."""
-        _advance(self.points, self.start, self.end, self.cursor, xy, mask)
+        advance_cursors(self.points, self.start, self.end, self.cursor, xy, mask)
 
     def steer_points(self, xy: np.ndarray) -> np.ndarray:
         """(n, 2) where each robot steers: on its route, `LOOKAHEAD_M` ahead of its projection on
@@ -155,7 +153,7 @@ class Routes:
         done with its route, the route's last point, where it keeps station; without a route,
         its own position. What the built-in controller steers for."""
         out = np.empty((len(xy), 2))
-        _steer_points(self.points, self.start, self.end, self.cursor, xy, out)
+        steer_points(self.points, self.start, self.end, self.cursor, xy, out)
         return out
 
     def compact(self) -> None:
@@ -269,102 +267,17 @@ def clear_of(points: np.ndarray, avoid: np.ndarray, radius_m: float) -> tuple[np
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _advance(points, start, end, cursor, xy, mask):
-    """`Routes.advance`, robot by robot. The clear cases are settled without a square root
-    (`_within`, `_may_pass`): each decision is the one `math.hypot` and `_leg` give."""
-    for i in range(cursor.shape[0]):
-        if not mask[i]:
-            continue
-        x, y = xy[i, 0], xy[i, 1]
-        for _ in range(4):
-            cur = cursor[i]
-            if cur >= end[i]:
-                break
-            final = cur == end[i] - 1
-            hit = _within(points[cur, 0] - x, points[cur, 1] - y, FINAL_CAPTURE_M if final else CAPTURE_M)
-            if not hit and not final and _may_pass(points, start[i], cur, x, y):
-                _, _, _, _, length, along, cross = _leg(points, start[i], cur, x, y)
-                hit = length > 0 and along >= length and abs(cross) <= PASS_CROSS_TRACK_M
-            if not hit:
-                break
-            cursor[i] += 1
-
-
-#: Relative margin far above the rounding of the squared forms in `_within` and `_may_pass`.
-_MARGIN = 1e-9
-
-
-@numba.njit(cache=True, error_model="numpy", inline="always")
-def _within(dx, dy, radius):
-    """`math.hypot(dx, dy) < radius`, from the squared distance unless it is within rounding of
-    the radius."""
-    d2, r2 = dx * dx + dy * dy, radius * radius
-    if d2 < r2 * (1.0 - _MARGIN):
-        return True
-    if d2 > r2 * (1.0 + _MARGIN):
-        return False
-    return math.hypot(dx, dy) < radius
-
-
-@numba.njit(cache=True, error_model="numpy", inline="always")
-def _may_pass(points, start, cur, x, y):
-    """False where a robot is surely short of its leg's end (`_leg`'s along < length): the leg
-    l and the robot r from the leg's start give r . l < |l|^2 by more than rounding."""
-    prev = cur - 1 if cur > start else cur
-    lx, ly = points[cur, 0] - points[prev, 0], points[cur, 1] - points[prev, 1]
-    rx, ry = x - points[prev, 0], y - points[prev, 1]
-    ll = lx * lx + ly * ly
-    return rx * lx + ry * ly >= ll - _MARGIN * (abs(rx * lx) + abs(ry * ly) + ll)
-
-
-@numba.njit(cache=True, error_model="numpy", inline="always")
-def _leg(points, start, cur, x, y):
-    """The leg a robot is on (from the waypoint before its cursor `cur` to the cursor's): its
-    first point, its direction, its length (0 on a route's first waypoint) and the robot's
-    position along and across it."""
-    prev = cur - 1 if cur > start else cur
-    px, py = points[prev, 0], points[prev, 1]
-    lx, ly = points[cur, 0] - px, points[cur, 1] - py
-    length = math.hypot(lx, ly)
-    ux, uy = lx / maximum(length, 1e-12), ly / maximum(length, 1e-12)
-    rx, ry = x - px, y - py
-    return px, py, lx, ly, length, rx * ux + ry * uy, ux * ry - uy * rx
-
-
-@numba.njit(cache=True, error_model="numpy")
 def _leg_starts(points, start, end, cursor, xy):
     """`Routes.leg_starts`, robot by robot, in place on `xy`: each robot's closest point on its
-    leg (`_leg`), where it has one."""
+    leg (`leg`), where it has one."""
     for i in range(xy.shape[0]):
         if cursor[i] >= end[i] or cursor[i] == start[i]:
             continue
-        px, py, lx, ly, _, _, _ = _leg(points, start[i], cursor[i], xy[i, 0], xy[i, 1])
+        px, py, lx, ly, _, _, _ = leg(points, start[i], cursor[i], xy[i, 0], xy[i, 1])
         ll = lx * lx + ly * ly
         if ll > 0:
             t = minimum(maximum(((xy[i, 0] - px) * lx + (xy[i, 1] - py) * ly) / ll, 0.0), 1.0)
             xy[i, 0], xy[i, 1] = px + t * lx, py + t * ly
-
-
-@numba.njit(cache=True, error_model="numpy")
-def _steer_points(points, start, end, cursor, xy, out):
-    """`Routes.steer_points`, robot by robot."""
-    for i in range(xy.shape[0]):
-        out[i, 0], out[i, 1] = steer_point(points, start[i], end[i], cursor[i], xy[i, 0], xy[i, 1])
-
-
-@numba.njit(cache=True, error_model="numpy", inline="always")
-def steer_point(points, start, end, cur, x, y):
-    """Where one robot at (x, y) steers (`Routes.steer_points`), from its route's slice and cursor."""
-    if cur < end:
-        px, py, lx, ly, length, along, _ = _leg(points, start, cur, x, y)
-        ahead = minimum(maximum(along, 0.0), length) + LOOKAHEAD_M
-        if length > 0 and ahead < length:
-            frac = ahead / maximum(length, 1e-12)
-            return px + lx * frac, py + ly * frac
-        return points[cur, 0], points[cur, 1]
-    if end > start:
-        return points[end - 1, 0], points[end - 1, 1]
-    return x, y
 
 
 @numba.njit(cache=True, error_model="numpy")

@@ -21,9 +21,8 @@ from swarm.mission.exposure import WayOut
 from swarm.mission.plan import MissionPlan, pickup_points, place_xy, radio_params
 from swarm.mission.schema import Mission, Radio
 from swarm.planning.router import Router
-from swarm.robot.driving import MAX_WHEEL_SPEED_FACTOR
+from swarm.robot.driving import MAX_WHEEL_SPEED_FACTOR, DriveLimits
 from swarm.sim import physics
-from swarm.sim.control import DriveLimits
 from swarm.sim.layout import ROLES
 
 #: Spares wait on dry ground at least this far from water (m).

@@ -40,12 +40,12 @@ from numba.typed import List
 from scipy.spatial import cKDTree
 
 from swarm.errors import SwarmError
+from swarm.robot.driving import drive_toward, steer_point
 from swarm.robot.terrain import GROUND_SUBMERSION
 from swarm.sim import comms, draws, hazards, sensing
-from swarm.sim.control import drive_toward
 from swarm.sim.criteria import STATION_RADIUS_M, MissionScore
 from swarm.sim.mines import lay_mines
-from swarm.sim.routes import Routes, steer_point
+from swarm.sim.routes import Routes
 from swarm.sim.runview import (
     AVOID_MINE_M,
     BEACH,
@@ -312,7 +312,7 @@ class World:
     # commands ---------------------------------------------------------------------------------------
     def controller_commands(self) -> tuple[np.ndarray, np.ndarray]:
         """Wheel (B, n, 2) and jet (B, n) commands for every robot from its command, route and
-        target: the built-in controller (`swarm.sim.control`) of command mode and the policy."""
+        target: the built-in controller (`swarm.robot.driving`) of command mode and the policy."""
         s = self.setup
         state = self.flat("robot_state")
         r = self.routes

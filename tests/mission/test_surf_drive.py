@@ -13,9 +13,9 @@ from swarm.mission import budget, exposure, load_mission, surf_drive
 from swarm.mission.plan import _budget, plan_mission
 from swarm.mission.surf_speed import SurfZone
 from swarm.planning.router import Router
+from swarm.robot.driving import DriveLimits, drive_toward
 from swarm.robot.terrain import GROUND_SUBMERSION
-from swarm.sim import control, routes, setup
-from swarm.sim.control import DriveLimits, drive_toward
+from swarm.sim import setup
 from swarm.sim.env import SimConfig
 from swarm.sim.physics import Physics, SeaState
 from swarm.sim.routes import Routes
@@ -88,14 +88,15 @@ def _simulated_ways_in(mission, lines: list[np.ndarray], phases: np.ndarray):
 
 
 def test_the_drive_steps_as_the_simulator_does() -> None:
-    """The drive's step and substep are the simulator's defaults (its gains and radii are the
-    simulator's own objects, `swarm.robot.driving`)."""
+    """The drive's step and substep are the simulator's defaults, and it follows its route and
+    turns it into commands with the simulator's own kernels (`swarm.robot.driving`)."""
+    from swarm.sim import routes, world
+
     cfg = SimConfig()
     assert (cfg.dt_s, cfg.substep_s) == (surf_drive.STEP_S, surf_drive.SUBSTEP_S)
-    for name in ("CAPTURE_M", "LOOKAHEAD_M", "PASS_CROSS_TRACK_M"):
-        assert getattr(surf_drive, name) is getattr(routes, name)
-    for name in ("YAW_GAIN_PER_S", "PIVOT_ERROR_RAD", "EFFECTIVE_TRACK_SCALE"):
-        assert getattr(surf_drive, name) is getattr(control, name)
+    assert surf_drive.drive_toward is world.drive_toward
+    assert surf_drive.advance_cursors is routes.advance_cursors
+    assert surf_drive.steer_points is routes.steer_points
 
 
 def test_the_way_in_is_the_simulator_s(landing_plan) -> None:

@@ -13,8 +13,8 @@ from swarm.mission.plan import pickup_points, place_xy
 from swarm.mission.surf_speed import SUBSTEP_S, SurfZone, mean_speed
 from swarm.planning import build_costmap
 from swarm.planning.router import Router
+from swarm.robot.driving import DriveLimits, drive_toward
 from swarm.robot.terrain import GROUND_SUBMERSION
-from swarm.sim.control import DriveLimits, drive_toward
 from swarm.sim.env import SimConfig
 from swarm.sim.physics import Physics, SeaState
 

@@ -7,15 +7,9 @@ import pytest
 from scipy.spatial import cKDTree
 from shapely.geometry import LineString, Point
 
+from swarm.robot.driving import CAPTURE_M, FINAL_CAPTURE_M, LOOKAHEAD_M, PASS_CROSS_TRACK_M
 from swarm.sim.hazards import _armed_near, contact_reach2
-from swarm.sim.routes import (
-    CAPTURE_M,
-    FINAL_CAPTURE_M,
-    LOOKAHEAD_M,
-    PASS_CROSS_TRACK_M,
-    Routes,
-    pairwise_sum,
-)
+from swarm.sim.routes import Routes, pairwise_sum
 from swarm.sim.runview import AVOID_MINE_M
 
 

@@ -9,9 +9,10 @@ from shapely.geometry import LineString, Point
 from tiny_missions import write_mission
 
 from swarm.mission.load import load_mission
+from swarm.robot.driving import LOOKAHEAD_M
 from swarm.sim.env import SwarmEnv
 from swarm.sim.policy import ScriptedPolicy, WorkItem
-from swarm.sim.routes import LOOKAHEAD_M, Routes, clear_of
+from swarm.sim.routes import Routes, clear_of
 
 QUIET = {
     "attrition": {"mtbf_h": 1.0e6},

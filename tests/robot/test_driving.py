@@ -1,12 +1,13 @@
-"""The built-in controller (`swarm.sim.control.drive_toward`): its per-robot kernel gives the floats
+"""The built-in controller (`swarm.robot.driving.drive_toward`): its per-robot kernel gives the floats
 of the rule as first written in numpy, stopped and turned-over robots included."""
 
 from __future__ import annotations
 
 import numpy as np
 
-from swarm.sim import control
-from swarm.sim.control import DriveLimits, drive_toward
+from swarm.robot import driving as control
+from swarm.robot.driving import DriveLimits, drive_toward
+from swarm.robot.validate import wrap_angle
 
 LIMITS = DriveLimits(
     wheel_radius_m=0.06,
@@ -21,7 +22,7 @@ def _numpy_rule(state, target, speed, submersion, inverted, limits, moving):
     d = target - state[:, :2]
     dist = np.hypot(d[:, 0], d[:, 1])
     go = (dist > control.ARRIVE_M) & moving
-    err = control.wrap_angle(np.arctan2(d[:, 1], d[:, 0]) - state[:, 2])
+    err = wrap_angle(np.arctan2(d[:, 1], d[:, 0]) - state[:, 2])
     cos_err = np.cos(err)
     yaw = np.clip(control.YAW_GAIN_PER_S * err, -control.MAX_YAW_RATE_RADPS, control.MAX_YAW_RATE_RADPS)
     fwd = np.where(np.abs(err) < control.PIVOT_ERROR_RAD, np.minimum(speed, 0.1 + 0.5 * dist) * cos_err, 0.0)
