@@ -20,6 +20,7 @@ from matplotlib.collections import LineCollection
 from matplotlib.colors import Normalize
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
+from scipy.cluster.hierarchy import fclusterdata
 from shapely.geometry.base import BaseGeometry
 from shapely.plotting import patch_from_polygon
 
@@ -100,8 +101,7 @@ def _draw_relay(ax, plan: MissionPlan, margins: Sequence[float] | None, labels: 
         ),
     ]
     if labels:
-        names = node_names(n_fixed - 1, len(nodes) - n_fixed)
-        for xy, name in zip(nodes, names, strict=True):
+        for xy, name in _node_labels(nodes, node_names(n_fixed - 1, len(nodes) - n_fixed)):
             ax.annotate(
                 name,
                 xy,
@@ -114,6 +114,21 @@ def _draw_relay(ax, plan: MissionPlan, margins: Sequence[float] | None, labels: 
                 bbox={"boxstyle": "round,pad=0.1", "fc": "white", "ec": "none", "alpha": 0.7},
             )
     return handles
+
+
+def _node_labels(nodes: np.ndarray, names: list[str]) -> list[tuple[np.ndarray, str]]:
+    """One label per cluster of nodes closer than 2% of the graph's extent (the chains of a
+    redundant relay stand side by side, and their labels overprinted each other): the names
+    joined, at the cluster's first node."""
+    if len(nodes) < 2:
+        return list(zip(nodes, names, strict=True))
+    span = float(max(np.ptp(nodes[:, 0]), np.ptp(nodes[:, 1]), 1.0))
+    cluster = fclusterdata(nodes, t=0.02 * span, criterion="distance", method="single")
+    out = []
+    for c in dict.fromkeys(cluster.tolist()):  # clusters in the order of their first node
+        members = np.flatnonzero(cluster == c)
+        out.append((nodes[members[0]], ", ".join(names[k] for k in members)))
+    return out
 
 
 def unique_handles(handles: list) -> list:
