@@ -89,8 +89,23 @@ def answer(summary: dict) -> str:
         return (
             f"{mission}{where}: P(success) = {p['success_rate']:.3f} over {p['runs']} runs "
             f"({percent(confidence)} Wilson interval {p['wilson_low']:.3f} to {p['wilson_high']:.3f})"
+            f"{_against_target(p, target, confidence)}"
         )
     return f"{mission}: no required value was computed for this study"
+
+
+def _against_target(point: dict, target: float | None, confidence: float) -> str:
+    """What one point's runs say of the target: shown, not yet shown (and the runs that would show
+    it at the rate seen: 64 successes in 64 cannot show 0.95, 73 would), or below it."""
+    if target is None or not point.get("runs"):
+        return ""
+    goal = f"{target:g} at {percent(confidence)} confidence"
+    if point["wilson_low"] >= target:
+        return f": reaches {goal}"
+    need = stats.runs_for_lower_bound(point["success_rate"], target, confidence)
+    if need is None:
+        return f": short of {goal}, and more runs will not lift a rate of {point['success_rate']:.3f}"
+    return f": not yet shown to reach {goal}; about {need} runs would show it at the rate seen"
 
 
 def answered(summary: dict) -> bool:

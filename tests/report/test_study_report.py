@@ -533,3 +533,31 @@ def test_the_plan_against_its_runs_is_drawn_only_where_the_plan_says_something()
     # a table from before the plan's columns, or a mission with nothing to expect: no figure
     bare = [{k: v for k, v in p.items() if not k.startswith("planned")} for p in points]
     assert figs.agreement_png({**summary, "points": bare}) is None
+
+
+def test_one_point_s_answer_says_whether_its_runs_show_the_target() -> None:
+    """mine_clear's 64 runs all succeeded and the report said not met, with no word of why: a
+    Wilson lower bound of 0.943 cannot reach 0.95 from 64 runs. The answer says what the runs
+    show: reached, not yet shown (with the runs that would show it at the rate seen: n / (n + z^2)
+    >= 0.95 first at 73 when every run succeeds), or short with a rate more runs will not lift."""
+    from swarm.studies.stats import wilson_interval
+
+    def one(successes: int, runs: int) -> dict:
+        lo, hi = wilson_interval(successes, runs)
+        point = {"runs": runs, "successes": successes, "success_rate": successes / runs}
+        return {
+            "mission": "m",
+            "target": 0.95,
+            "confidence": 0.95,
+            "points": [point | {"wilson_low": lo, "wilson_high": hi}],
+        }
+
+    assert answer(one(64, 64)).endswith(
+        ": not yet shown to reach 0.95 at 95% confidence; about 73 runs would show it at the rate seen"
+    )
+    z2 = 1.959963984540054**2
+    assert 72 / (72 + z2) < 0.95 <= 73 / (73 + z2)  # the closed form of the all-success bound
+    assert answer(one(73, 73)).endswith(": reaches 0.95 at 95% confidence")
+    assert answer(one(93, 100)).endswith(
+        ": short of 0.95 at 95% confidence, and more runs will not lift a rate of 0.930"
+    )
