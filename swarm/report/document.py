@@ -32,7 +32,7 @@ from swarm.report.html_page import html_figure, html_page, html_table, md_table
 #: Report formats: file suffix by format name.
 FORMATS = {"html": ".html", "md": ".md", "json": ".json"}
 #: What a verdict's status means, for the page's colours.
-STATUSES = ("met", "not met", "none")
+STATUSES = ("met", "not met", "not shown", "none")
 MISSING = "-"
 
 
@@ -97,7 +97,8 @@ def header_rows(head: dict) -> list[list[str]]:
 
 
 def verdict(text: str, status: str, **numbers: object) -> dict:
-    """The report's verdict: one sentence, its status (met, not met, none) and the numbers behind it."""
+    """The report's verdict: one sentence, its status (met, not met, not shown: too few runs to tell,
+    none) and the numbers behind it."""
     if status not in STATUSES:
         raise ValueError(f"verdict status {status!r}, expected one of {STATUSES}")
     return {"text": text, "status": status, **numbers}

@@ -181,3 +181,37 @@ def test_a_mean_that_clears_the_criterion_does_not_pass_a_plan_that_misses_it_in
     old = plan_data(_search_plan(0.651, None))
     assert old["verdict"]["status"] == "met"
     assert all(not c["criterion"].startswith("P(") for c in old["verdict"]["checks"])
+
+
+def test_runs_too_few_to_show_the_target_are_not_a_plan_that_falls_short() -> None:
+    """`swarm plan --evaluate 8` of a plan whose 8 runs all succeeded said PLAN FALLS SHORT: 8 of 8
+    put the Wilson lower bound at 0.68, under 0.9. The rate seen is above the target, so the runs
+    have not shown it yet (about 35 would); a rate under the target, or a plan check that fails,
+    is short."""
+    from swarm.report.plan_report import NOT_SHOWN, _verdict, verdict_brief
+    from swarm.studies.stats import runs_for_lower_bound, wilson_interval
+
+    def sim(successes: int, runs: int) -> dict:
+        low = wilson_interval(successes, runs)[0]
+        return {
+            "criterion": "P(success) in simulation",
+            "value": low,
+            "target": 0.9,
+            "unit": "fraction",
+            "met": low >= 0.9,
+            "runs_needed": runs_for_lower_bound(successes / runs, 0.9),
+        }
+
+    plan_check = {"criterion": "c", "value": 1.0, "target": 0.5, "unit": "fraction", "met": True}
+    unshown = _verdict([plan_check, sim(8, 8)])
+    assert unshown["status"] == "not shown" and unshown["text"].startswith(NOT_SHOWN)
+    assert runs_for_lower_bound(1.0, 0.9) == 35 and "(about 35 runs would show it)" in unshown["text"]
+    assert (
+        verdict_brief(unshown)
+        == f"{NOT_SHOWN}: P(success) in simulation 67.6% < 90.0% (about 35 runs would show it)"
+    )
+    assert _verdict([plan_check, sim(35, 35)])["status"] == "met"
+    # 7 of 8 is a rate under 0.9: no number of runs shows it
+    assert _verdict([plan_check, sim(7, 8)])["status"] == "not met"
+    failing = {**plan_check, "value": 0.2, "met": False}
+    assert _verdict([failing, sim(8, 8)])["text"].startswith("PLAN FALLS SHORT: ")
