@@ -955,10 +955,6 @@ def _budget(mission: Mission, plan: MissionPlan) -> dict:
     spare_s: dict[str, float] = {}  # time the others have for it: reserves, searchers done early
     swing_s2: dict[str, float] = {}  # the variance of the difference, robot by robot
     pool_s, pool_s2 = 0.0, 0.0  # the mission's spares' time for any search, and its variance
-    takeover_end = min(
-        (budget.takeover_end_s(mission, exposure.task_of(mission, s)) for s in plan.search),
-        default=mission.beach_end_s,
-    )
     unseen_blasts = 0.0  # mines expected to go off before any sensor found them
     holders: list[float] = []  # the relay and spare robots' shares of the window ashore
     # the routes as the robots drive them: stitched around blocked ground, with the simulator's seed
@@ -999,10 +995,10 @@ def _budget(mission: Mission, plan: MissionPlan) -> dict:
             lasting.setdefault(task, []).append(still)
             if rp.role != "search":
                 reserves_lasting.setdefault(task, []).append(still)
-            # the takeovers run into the window's slack (`budget.takeover_end_s`), from when the
-            # robot is ashore at its track or spot (`exposure.at_work_s`)
-            end_s = budget.takeover_end_s(mission, exposure.task_of(mission, way.search))
-            span = max(end_s - way.at_work_s, 0.0)
+            # the takeovers run into the window's slack (`budget.takeover_end_s`) and on after
+            # the blast (`budget.takeover_s`), from when the robot is ashore at its track or spot
+            # (`exposure.at_work_s`)
+            span = budget.takeover_s(mission, exposure.task_of(mission, way.search), way.at_work_s)
             if rp.role == "search":  # its track left undone if it is lost, its slack if it is not
                 run_s = way.track_s  # its own track as driven (`exposure.track_drive_s`)
                 need_s[task] = need_s.get(task, 0.0) + run_s
@@ -1023,7 +1019,9 @@ def _budget(mission: Mission, plan: MissionPlan) -> dict:
             # the scripted policy sends the mission's spares to lost stations first, then to lost
             # tracks; a lost station takes one of them from about halfway on
             lost = budget.lost_probability(losses)
-            span = max(takeover_end - way.at_work_s, 0.0)
+            span = min(
+                budget.takeover_s(mission, exposure.task_of(mission, s), way.at_work_s) for s in plan.search
+            )
             pool_s += span * budget.time_ashore(losses) if rp.role == "spare" else -lost * span / 2.0
             pool_s2 += lost * (1.0 - lost) * (span / 2.0) ** 2
     # the spares' time goes to the searches in proportion to the work their losses leave
