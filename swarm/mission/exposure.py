@@ -64,6 +64,10 @@ class WayIn:
     search: SearchPlan | None
     arrive_s: float  # at its entry (release and swim)
     ashore_s: float  # on its wheels (`SurfZone.landfall`), where the simulator's beach phase starts
+    #: at work: ashore and driven to its track's start or its spot (`at_work_s`)
+    at_work_s: float
+    #: its own search track's drive at the search speed, turns included (`track_drive_s`); 0 without one
+    track_s: float
     window_end_s: float
     last_m: np.ndarray  # where its planned route ends
     track_m: dict[str, float]  # metres of its search tracks on each class
@@ -71,6 +75,30 @@ class WayIn:
     #: its exposure ashore on the way to its track, and along the track (`track_left`)
     before_track: budget.Exposure | None = None
     on_track: budget.Exposure | None = None
+
+
+def at_work_s(ashore_s: float, approach_m: float, speed_mps: float) -> float:
+    """When a robot ashore at `ashore_s` is at its track's start or its spot, `approach_m` of
+    ground away at `speed_mps`: its time for a lost searcher's track starts there, not at its
+    entry. Counting from the entry gave mine_clear's survivors at 2 m breakers their 230-410 s in
+    the surf (and the drive to the track) as takeover time: the simulated survivors land when the
+    plan's `ashore_s` says (within 40 s) and have that much less."""
+    return ashore_s + approach_m / speed_mps
+
+
+def polyline_m(points: np.ndarray) -> float:
+    """The length of the polyline `points` (m)."""
+    return float(LineString(points).length) if len(points) >= 2 else 0.0
+
+
+def track_drive_s(track_m: float, speed_mps: float, overhead: float) -> float:
+    """One searcher's drive along its own track (`track_m` as stitched around blocked ground, as
+    the simulator's robots drive it) at `speed_mps`, with the design's turn `overhead`. The design's
+    run (`SearchDesign.run_time_s`, the area over the spacing shared evenly) is of the laid lanes,
+    which stitching lengthens: mine_clear at 2 m breakers designs a 3988 s run, and its simulated
+    searchers take 4450-4890 s from landing to their track's end (8 runs, their approach of 20-120
+    s included)."""
+    return track_m / speed_mps * overhead
 
 
 def track_left(mission: Mission, cm: CostMap, way: WayIn, losses: dict[str, dict[str, float]]) -> float:
@@ -195,8 +223,13 @@ def way_in(
     )
     last = (land if len(land) else way)[-1]
     before, on_track = None, None
+    v = budget.ground_speed(mission, speed)
+    overhead = search.design.get("overhead", 1.0) if search is not None else 1.0
+    at_work = at_work_s(ashore_s, sum(approach.values()), v)
+    # the whole track: its metres in shallow water (mine_clear's tracks run into the lagoon) take
+    # time too, though no wheel-borne hazard counts them
+    drive_s = track_drive_s(polyline_m(rp.track_m), v, overhead) if len(rp.track_m) else 0.0
     if len(rp.track_m):
-        v = budget.ground_speed(mission, speed)
         before_s = min(sum(approach.values()) / v, exposure.beach_s)
         track_s = min(sum(track.values()) / v, exposure.beach_s - before_s)
         before = budget.Exposure(0.0, 0.0, before_s, approach, approach_inside, speed_mps=speed)
@@ -209,7 +242,20 @@ def way_in(
             in_mine_area_m=track_inside,
             surf_timeout=0.0,
         )
-    return WayIn(exposure, search, arrive, ashore_s, end, last, track, track_inside, before, on_track)
+    return WayIn(
+        exposure=exposure,
+        search=search,
+        arrive_s=arrive,
+        ashore_s=ashore_s,
+        at_work_s=at_work,
+        track_s=drive_s,
+        window_end_s=end,
+        last_m=last,
+        track_m=track,
+        track_inside_m=track_inside,
+        before_track=before,
+        on_track=on_track,
+    )
 
 
 def ways_in(

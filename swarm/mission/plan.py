@@ -949,14 +949,12 @@ def _budget(mission: Mission, plan: MissionPlan) -> dict:
     lasting: dict[str, list[float]] = {}  # each search team's robots' chances of lasting beach operations
     reserves_lasting: dict[str, list[float]] = {}  # the same of its reserves alone
     orphaned_s: dict[str, float] = {}  # search time lost searchers leave undone
+    need_s: dict[str, float] = {}  # the searchers' own tracks' drive time, every searcher's
     lost_run_s: dict[str, float] = {}  # the searchers' run time, each weighted by its chance of loss
+    lost_left_s: dict[str, float] = {}  # of which the lost searchers leave undriven
     spare_s: dict[str, float] = {}  # time the others have for it: reserves, searchers done early
     swing_s2: dict[str, float] = {}  # the variance of the difference, robot by robot
     pool_s, pool_s2 = 0.0, 0.0  # the mission's spares' time for any search, and its variance
-    takeover_end = min(
-        (budget.takeover_end_s(mission, exposure.task_of(mission, s)) for s in plan.search),
-        default=mission.beach_end_s,
-    )
     unseen_blasts = 0.0  # mines expected to go off before any sensor found them
     holders: list[float] = []  # the relay and spare robots' shares of the window ashore
     # the routes as the robots drive them: stitched around blocked ground, with the simulator's seed
@@ -997,17 +995,22 @@ def _budget(mission: Mission, plan: MissionPlan) -> dict:
             lasting.setdefault(task, []).append(still)
             if rp.role != "search":
                 reserves_lasting.setdefault(task, []).append(still)
-            # the takeovers run into the window's slack (`budget.takeover_end_s`)
-            end_s = budget.takeover_end_s(mission, exposure.task_of(mission, way.search))
-            span = max(end_s - way.arrive_s, 0.0)
-            run_s = way.search.design["search_time_s"]
+            # the takeovers run into the window's slack (`budget.takeover_end_s`) and on after
+            # the blast (`budget.takeover_s`), from when the robot is ashore at its track or spot
+            # (`exposure.at_work_s`)
+            span = budget.takeover_s(mission, exposure.task_of(mission, way.search), way.at_work_s)
             if rp.role == "search":  # its track left undone if it is lost, its slack if it is not
+                run_s = way.track_s  # its own track as driven (`exposure.track_drive_s`)
+                need_s[task] = need_s.get(task, 0.0) + run_s
                 left = exposure.track_left(mission, cm, way, losses)
                 slack = max(span - run_s, 0.0)
-                orphaned_s[task] = orphaned_s.get(task, 0.0) + left * run_s
+                # a searcher that lasts but lands too late to drive all of its track leaves the rest
+                cut = max(run_s - span, 0.0)
+                orphaned_s[task] = orphaned_s.get(task, 0.0) + left * run_s + (1.0 - lost) * cut
                 lost_run_s[task] = lost_run_s.get(task, 0.0) + lost * run_s
+                lost_left_s[task] = lost_left_s.get(task, 0.0) + left * run_s
                 spare_s[task] = spare_s.get(task, 0.0) + (1.0 - lost) * slack
-                swing = (left / lost * run_s if lost > 0 else 0.0) + slack  # lost against not
+                swing = (left / lost * run_s if lost > 0 else 0.0) + slack - cut  # lost against not
             else:  # a reserve, while it lasts
                 spare_s[task] = spare_s.get(task, 0.0) + span * budget.time_ashore(losses)
                 swing = span / 2.0
@@ -1016,7 +1019,9 @@ def _budget(mission: Mission, plan: MissionPlan) -> dict:
             # the scripted policy sends the mission's spares to lost stations first, then to lost
             # tracks; a lost station takes one of them from about halfway on
             lost = budget.lost_probability(losses)
-            span = max(takeover_end - way.arrive_s, 0.0)
+            span = min(
+                budget.takeover_s(mission, exposure.task_of(mission, s), way.at_work_s) for s in plan.search
+            )
             pool_s += span * budget.time_ashore(losses) if rp.role == "spare" else -lost * span / 2.0
             pool_s2 += lost * (1.0 - lost) * (span / 2.0) ** 2
     # the spares' time goes to the searches in proportion to the work their losses leave
@@ -1047,15 +1052,17 @@ def _budget(mission: Mission, plan: MissionPlan) -> dict:
                 _lateral_range(task.sensor),
                 ground=cm,
             )
-        need = s.design["searchers"] * s.design["search_time_s"]
+        need = need_s.get(s.task, 0.0)
         # the work left over in a run, not in the mean run: losses vary from run to run; the
         # drives to the lost tracks' pieces take their time out of the slack
         trips = trips_m.get(s.task, exposure.Trips(0.0, 0.0))
         travel_s = trips.to_pieces_m / mission.robot.wheel_speed_mps
-        undone = budget.expected_excess(
-            orphaned_s.get(s.task, 0.0) + travel_s - spare_s.get(s.task, 0.0),
-            math.sqrt(swing_s2.get(s.task, 0.0)),
-        )
+        left_over = orphaned_s.get(s.task, 0.0) + travel_s - spare_s.get(s.task, 0.0)
+        left_over_sd = math.sqrt(swing_s2.get(s.task, 0.0))
+        undone = budget.expected_excess(left_over, left_over_sd)
+        # nobody marks while a piece of lost track is open: the marks are made in the runs whose
+        # lost tracks are all taken over (`budget.p_no_excess`)
+        marking = budget.p_no_excess(left_over, left_over_sd)
         share = min(undone / need, 1.0) if need > 0 else 0.0
         # a strip whose track is left undone keeps what its neighbours' sensors reach into it: the
         # driven ones', and fewer of them where the lost searcher's band is left undone around it
@@ -1068,7 +1075,7 @@ def _budget(mission: Mission, plan: MissionPlan) -> dict:
             s.spacing_m,
             task.sensor.lateral_range,
             lanes=_lanes_per_searcher(s),
-            left=orphaned / lost_run if lost_run > 0 else 1.0,
+            left=lost_left_s.get(s.task, 0.0) / lost_run if lost_run > 0 else 1.0,
             undone=min(undone / orphaned, 1.0) if orphaned > 0 else 0.0,
             lost=lost_run / need if need > 0 else 0.0,
         )
@@ -1076,7 +1083,8 @@ def _budget(mission: Mission, plan: MissionPlan) -> dict:
         after = s.expected_detection * (1.0 - share * (1.0 - kept))
         if mine_area is not None:  # the trips off the tracks search what the ground lets them
             reachable = s.design.get("reachable_detection", 1.0)
-            after = budget.with_trips(after, reachable, s.sweep_width_m, trips.total_m, mine_area.area)
+            trips_made_m = trips.to_pieces_m + marking * trips.to_marks_m
+            after = budget.with_trips(after, reachable, s.sweep_width_m, trips_made_m, mine_area.area)
         if mines > 0:
             after = max(0.0, after - unseen_blasts / mines)
         random_count = budget.mine_count_is_random(mission)
@@ -1085,12 +1093,14 @@ def _budget(mission: Mission, plan: MissionPlan) -> dict:
         s.design["p_criterion_met"] = as_planned
         if task.mark and task.clearance is not None:
             # a robot of the team marks each mine found and the clearance expends it: a reserve
-            # that lasts, surely; a searcher only once its track and the lost tracks it can take
-            # are done (`swarm.sim.policy`), so at most every robot of the team that lasts; the
-            # mines found and the robots that last both vary from run to run (`expected_markers`)
+            # that lasts, surely once the lost tracks are all taken over (`marking`); a searcher
+            # only once its track and the lost tracks it can take are done (`swarm.sim.policy`),
+            # so at most every robot of the team that lasts; the mines found and the robots that
+            # last both vary from run to run (`expected_markers`)
             for end, team in enumerate((reserves_lasting, lasting)):
                 chances = team.get(s.task, [])
-                markers[end] += budget.expected_markers(mines, after, chances, poisson=random_count)
+                made = budget.expected_markers(mines, after, chances, poisson=random_count)
+                markers[end] += made * (marking if end == 0 else 1.0)
         searches[s.task] = {
             "criterion": criterion,
             "expected_detection": s.expected_detection,

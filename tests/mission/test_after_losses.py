@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import shapely
 from scipy.stats import binom
 
 from swarm.mission import budget, mission_from_dict
@@ -139,3 +140,137 @@ def test_an_undone_band_among_lost_bands_keeps_nothing(model: str, w: float, s: 
     some = budget.undone_band_kept(model, w, s, lanes=3.0, left=1.0, undone=1.0, lost=0.5)
     none = budget.undone_band_kept(model, w, s, lanes=3.0, left=1.0, undone=1.0, lost=0.0)
     assert gone < some < none
+
+
+def _stranding_mission():
+    """Eight robots from the beach's edge into 1 m breakers with a 60 s surf crossing: the
+    longshore current strands three of them (a reserve and two searchers) at every phase of the
+    wave, and the survivors' slack before the clearance is short of the two lost tracks."""
+    raw = {
+        "name": "surf_stranding",
+        "map": "../maps/test_small.yaml",
+        "planner": "../planners/fast.yaml",
+        "swarm": {"count": 8},
+        "launch": {
+            "platform": "by_hand",
+            "points": ["launch_1", "launch_2"],
+            "offshore_m": 20,
+            "interval_s": 2,
+        },
+        "phases": {
+            "sea_transit": {"time_limit_s": 150},
+            "surf_crossing": {"time_limit_s": 60},
+            "beach_operations": {"time_limit_s": 700},
+        },
+        "tasks": [
+            {
+                "type": "search",
+                "area": "search_beach",
+                "sensor": {"sweep_width_m": 5.0},
+                "track_spacing_m": 2.5,
+                "mark": True,
+                "clearance": {"at_s": 850, "standoff_m": 10},
+            }
+        ],
+        "success": {"min_detection_fraction": 0.5},
+        "hazards": {"mines": {"count": 30}, "surf": {"wave_height_m": 1.0}},
+    }
+    return mission_from_dict(raw, REPO / "missions" / "surf_stranding.yaml")
+
+
+@pytest.fixture(scope="module")
+def stranding():
+    """The stranding mission, its plan, each robot's way in as the budget counts it, and 16
+    simulated runs of the plan."""
+    from swarm.mission import exposure
+    from swarm.mission.surf_speed import SurfZone
+    from swarm.planning.router import Router
+    from swarm.sim.run import simulate_batch
+
+    mission = _stranding_mission()
+    plan = plan_mission(mission, seed=2, workers=1)
+    cm = plan.costmap
+    zone = SurfZone(mission, cm)
+    ashore = exposure.nearest_ashore(mission, cm, zone.heights > 0)
+    router = Router(cm, seed=mission.seed)
+    driven = [exposure.drivable(rp, router) for rp in plan.robots]
+    mine_area = shapely.union_all(budget.mine_areas(mission))
+    by_task = {s.task: s for s in plan.search}
+    ways = exposure.ways_in(mission, cm, driven, zone, ashore, mine_area, by_task)
+    logs = simulate_batch(mission, list(range(100, 116)), plan=plan, record_every_s=math.inf)
+    return plan, ways, logs
+
+
+def _first(log, robot: str, kind: str) -> float | None:
+    """The time of `robot`'s first event of `kind` in the run, None without one."""
+    return next((e["t_s"] for e in log.events if e.get("robot") == robot and e["kind"] == kind), None)
+
+
+def test_the_survivors_time_for_lost_tracks_starts_when_their_own_is_driven(stranding) -> None:
+    """Three of eight robots are stranded in the surf and every other searcher takes over lost
+    track as soon as its own is done (the first takeover). The budget counts a searcher's time for
+    lost tracks from its landing (`ashore_s`, then `at_work_s` at its track) plus its own track as
+    stitched (`track_s`): 512 s a searcher from landing against the runs' 513 s. It used to count
+    from its entry into the surf (35-45 s before the landing here, 230-410 s at mine_clear's 2 m
+    breakers) plus the design's even share of the lanes (390 s), so the survivors had time for
+    lost tracks that they spend on their own."""
+    plan, ways, logs = stranding
+    assert len(plan.budget["stranded_in_surf"]) == 3
+    planned, simulated = [], []
+    for rp, way in zip(plan.robots, ways, strict=True):
+        landed = [t for log in logs if (t := _first(log, rp.id, "ashore")) is not None]
+        if landed:  # a robot that lands does so when the plan says
+            assert np.mean(landed) == pytest.approx(way.ashore_s, abs=10.0)
+            assert way.at_work_s >= np.mean(landed)
+        own = [
+            t - a
+            for log in logs
+            if (a := _first(log, rp.id, "ashore")) is not None
+            and (t := _first(log, rp.id, "takeover")) is not None
+        ]
+        if rp.role == "search" and own:
+            planned.append(way.at_work_s - way.ashore_s + way.track_s)
+            simulated.append(np.mean(own))
+    assert len(planned) >= 3
+    assert np.mean(planned) == pytest.approx(np.mean(simulated), rel=0.1)
+    assert plan.search[0].design["search_time_s"] < 0.85 * np.mean(simulated)  # the design's share
+
+
+def test_nobody_marks_while_lost_track_is_open(stranding) -> None:
+    """The scripted policy hands a mark only to a robot that knows of no open piece of lost track,
+    so a reserve marks only in the runs whose lost tracks are all taken over (`budget.p_no_excess`,
+    3% here): the fewest markers the plan expects are no longer the reserves that last (0.52, where
+    it is now 0.03), and the runs expend within the plan's range (1.0 a run)."""
+    plan, _, logs = stranding
+    least, most = plan.budget["expected_expended"]
+    expended = np.mean([log.summary()["end_states"].get("expended", 0) for log in logs])
+    assert least < 0.1
+    assert least <= expended <= most
+
+
+def test_no_excess_is_the_chance_below_zero_of_the_excess_s_normal() -> None:
+    """`p_no_excess` is P(D <= 0) of the normal whose positive part `expected_excess` averages: the
+    slope of E[max(D, 0)] in the mean is P(D > 0)."""
+    for mean, sd in ((-3000.0, 2000.0), (0.0, 500.0), (1500.0, 800.0)):
+        h = 1e-3 * sd
+        slope = (budget.expected_excess(mean + h, sd) - budget.expected_excess(mean - h, sd)) / (2 * h)
+        assert 1.0 - budget.p_no_excess(mean, sd) == pytest.approx(slope, abs=1e-6)
+    assert budget.p_no_excess(-1.0, 0.0) == 1.0
+    assert budget.p_no_excess(1.0, 0.0) == 0.0
+
+
+def test_the_survivors_work_until_the_retreat_and_again_after_the_blast() -> None:
+    """mine_clear: the retreat before the 7200 s clearance starts at 7020 s (50 m standoff + 10 m
+    at 0.6 m/s, x 1.5, + 30 s), and beach operations run on to 7800 s, when the scripted policy's
+    robots drive the lost tracks' pieces again (16 runs at 2 m breakers: 26.4% of the tracks open
+    at the retreat, 20.8% at the end)."""
+    from swarm.mission import load_mission
+
+    mission = load_mission(REPO / "missions" / "mine_clear.yaml")
+    (task,) = mission.tasks_of("search")
+    end = budget.takeover_end_s(mission, task)
+    assert end == pytest.approx(7020.0)
+    assert mission.beach_end_s == 7800.0
+    assert budget.takeover_s(mission, task, 1500.0) == pytest.approx(end - 1500.0 + 600.0)
+    assert budget.takeover_s(mission, task, 7100.0) == pytest.approx(600.0)  # at work after the retreat
+    assert budget.takeover_s(mission, task, 7500.0) == pytest.approx(300.0)
