@@ -3,14 +3,15 @@ the surf crossing's time limit (`surf_timeout` in `swarm.sim.hazards`), how long
 breakers it meets.
 
 Why not `surf_speed.SurfZone.crossing` alone: that holds a robot on its line. The simulator's
-robots are not held. Afloat in deep water (a mode with buoyancy 1) the wheels have no grip, so
-nothing turns the robot: it swims on the heading it arrived with while the longshore current sets
-it along the beach (Longuet-Higgins, `SurfHazard.longshore_current`: 0.32 m/s for 1 m breakers,
-0.64 for 4 m at the default 5 degrees). Pushed off its leg by more than the route follower's
-`PASS_CROSS_TRACK_M`, it is steered back to the leg's end, upstream into the current, where the
-breakers' orbital flow leaves it little way; it is swept along until the limit runs out. Landing
-at 4 m breakers (16 runs): 3.0 robots of 12 a run timed out in the surf and 1.0 more were
-disabled by breakers over the longer stay; the plan counted 0.15 losses in the surf in all.
+robots are not held. Afloat in deep water (a mode with buoyancy 1) the wheels have no grip, and
+the longshore current sets a robot along the beach (Longuet-Higgins,
+`SurfHazard.longshore_current`: 0.32 m/s for 1 m breakers, 0.64 for 4 m at the default 5
+degrees) while it closes on its leg's line at up to 45 degrees (`swarm.robot.driving.steer_point`).
+It lands down-current of its leg, later than a robot held on it, and where the current and the
+breakers' orbital flow beat its jet, not at all before the limit. (Before the route follower
+steered afloat robots along the leg's line it headed them back up-current for the leg's end:
+landing at 4 m breakers stranded 3.0 robots of 12 a run, and the plan, holding robots on their
+line, counted 0.15 losses in the surf in all.)
 
 So the plan drives each robot's way in (its sea leg and ground path, as the simulator's routes have
 it) from its launch point with the simulator's own rules, reduced to one robot with no hazards:
@@ -151,8 +152,9 @@ def drive_in(mission: Mission, zone: SurfZone, routes: list[np.ndarray]) -> list
         if not live.any():
             break
         # the simulator's route follower and controller (`World.controller_commands`)
-        advance_cursors(points, start, end, cursor, state[:, :2], live)
-        steer_points(points, start, end, cursor, state[:, :2], target)
+        afloat = submersion > GROUND_SUBMERSION
+        advance_cursors(points, start, end, cursor, state[:, :2], live, afloat)
+        steer_points(points, start, end, cursor, state[:, :2], afloat, target)
         omega, jet, _ = drive_toward(state, target, cruise, submersion, upright, limits, live)
         for k in range(subs):
             t0 = t + k * SUBSTEP_S

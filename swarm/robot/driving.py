@@ -161,10 +161,12 @@ def _drive(
 
 
 @numba.njit(cache=True, error_model="numpy")
-def advance_cursors(points, start, end, cursor, xy, mask):
+def advance_cursors(points, start, end, cursor, xy, mask, afloat):
     """Each robot's cursor (`swarm.sim.routes.Routes.advance`) past every waypoint it has reached,
     a few a step, robot by robot. The clear cases are settled without a square root
-    (`_within`, `_may_pass`): each decision is the one `math.hypot` and `leg` give."""
+    (`_within`, `_may_pass`): each decision is the one `math.hypot` and `leg` give. A robot
+    `afloat` passes a leg's end once abeam of it, however far off the leg the current has set it
+    (`steer_point`)."""
     for i in range(cursor.shape[0]):
         if not mask[i]:
             continue
@@ -177,7 +179,11 @@ def advance_cursors(points, start, end, cursor, xy, mask):
             hit = _within(points[cur, 0] - x, points[cur, 1] - y, FINAL_CAPTURE_M if final else CAPTURE_M)
             if not hit and not final and _may_pass(points, start[i], cur, x, y):
                 _, _, _, _, length, along, cross = leg(points, start[i], cur, x, y)
-                hit = length > 0 and along >= length and abs(cross) <= PASS_CROSS_TRACK_M
+                # a waypoint repeating the one before (a path's joint) is passed with it
+                hit = length == 0 and cur > start[i]
+                hit = hit or (
+                    length > 0 and along >= length and (afloat[i] or abs(cross) <= PASS_CROSS_TRACK_M)
+                )
             if not hit:
                 break
             cursor[i] += 1
@@ -225,19 +231,32 @@ def leg(points, start, cur, x, y):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def steer_points(points, start, end, cursor, xy, out):
+def steer_points(points, start, end, cursor, xy, afloat, out):
     """Each robot's steer point (`steer_point`) into `out`, robot by robot."""
     for i in range(xy.shape[0]):
-        out[i, 0], out[i, 1] = steer_point(points, start[i], end[i], cursor[i], xy[i, 0], xy[i, 1])
+        out[i, 0], out[i, 1] = steer_point(points, start[i], end[i], cursor[i], xy[i, 0], xy[i, 1], afloat[i])
 
 
 @numba.njit(cache=True, error_model="numpy", inline="always")
-def steer_point(points, start, end, cur, x, y):
+def steer_point(points, start, end, cur, x, y, afloat):
     """Where one robot at (x, y) steers (`swarm.sim.routes.Routes.steer_points`), from its route's
-    slice and cursor."""
+    slice and cursor: `LOOKAHEAD_M` ahead of its projection on its leg, capped at the leg's end.
+
+    Afloat, the wheels have no grip and the longshore current sets the robot off its leg: it
+    steers for a point as far ahead along the leg's line as it is off it (line-of-sight guidance
+    with a lookahead that grows with the cross-track error, as marine craft are steered in a
+    current: Fossen, Handbook of Marine Craft Hydrodynamics and Motion Control, 2011, ch. 10;
+    Lekkas and Fossen, 2012), past the leg's end but the route's last: it closes on the line at
+    most 45 degrees off its direction and keeps making way, where a fixed lookahead turned it
+    square into the current, back for the leg, and the surf's time limit stranded it."""
     if cur < end:
-        px, py, lx, ly, length, along, _ = leg(points, start, cur, x, y)
-        ahead = minimum(maximum(along, 0.0), length) + LOOKAHEAD_M
+        px, py, lx, ly, length, along, cross = leg(points, start, cur, x, y)
+        if afloat:
+            ahead = maximum(along, 0.0) + maximum(LOOKAHEAD_M, abs(cross))
+            if cur < end - 1 and length > 0:  # on along the leg's line, past its end
+                return px + lx * (ahead / length), py + ly * (ahead / length)
+        else:
+            ahead = minimum(maximum(along, 0.0), length) + LOOKAHEAD_M
         if length > 0 and ahead < length:
             frac = ahead / maximum(length, 1e-12)
             return px + lx * frac, py + ly * frac

@@ -73,6 +73,7 @@ def _advance_every_robot(routes: Routes, xy: np.ndarray, mask: np.ndarray) -> No
         along = rel[:, 0] * unit[:, 0] + rel[:, 1] * unit[:, 1]
         cross = unit[:, 0] * rel[:, 1] - unit[:, 1] * rel[:, 0]
         hit |= ~final & (length > 0) & (along >= length) & (np.abs(cross) <= PASS_CROSS_TRACK_M)
+        hit |= ~final & (length == 0) & (cur > routes.start[idx])  # a repeated waypoint
         if not hit.any():
             return
         routes.cursor[idx[hit]] += 1
@@ -292,3 +293,45 @@ def test_a_route_whose_track_starts_at_its_first_point_is_on_its_track() -> None
         np.testing.assert_array_equal(routes.in_track(), [True, False])
     routes.cursor[:] = routes.end
     np.testing.assert_array_equal(routes.in_track(), [False, False])
+
+
+def test_afloat_a_robot_set_off_its_leg_steers_along_the_leg_s_line_and_passes_it_abeam() -> None:
+    """A leg straight ashore (north) and a robot the longshore current has set 20 m east of it. On
+    its wheels it steers for the leg 1.5 m ahead of its projection, square across; afloat, for a
+    point as far ahead as it is off the leg (a 45 degree closing course), on past the leg's end but
+    the route's last, and it passes the leg's end once abeam of it, however far off."""
+    route = np.array([[0.0, 0.0], [0.0, 50.0], [0.0, 100.0]])
+    routes = Routes(2)
+    routes.set(0, route)
+    routes.set(1, route)
+    routes.cursor[:] = routes.start + 1
+    xy = np.array([[20.0, 10.0], [20.0, 10.0]])
+    afloat = np.array([True, False])
+    target = routes.steer_points(xy, afloat)
+    np.testing.assert_allclose(target, [[0.0, 30.0], [0.0, 11.5]])
+    d = target[0] - xy[0]
+    assert np.degrees(np.arctan2(d[1], -d[0])) == pytest.approx(45.0)
+    # near the leg's end: on along its line afloat, its end on wheels
+    xy = np.array([[20.0, 49.0], [20.0, 49.0]])
+    np.testing.assert_allclose(routes.steer_points(xy, afloat), [[0.0, 69.0], [0.0, 50.0]])
+    # abeam of the end, 20 m off: afloat it is passed, on wheels the robot goes back for it
+    xy = np.array([[20.0, 51.0], [20.0, 51.0]])
+    routes.advance(xy, np.ones(2, bool), afloat)
+    assert (routes.cursor - routes.start).tolist() == [2, 1]
+    # on the route's last leg the last point is where it steers afloat too
+    np.testing.assert_allclose(routes.steer_points(np.array([[20.0, 90.0]] * 2), afloat)[0], [0.0, 100.0])
+    # close to the leg, afloat or not, the lookahead is the same 1.5 m
+    near = np.array([[0.5, 60.0], [0.5, 60.0]])
+    routes.cursor[:] = routes.start + 2
+    np.testing.assert_allclose(routes.steer_points(near, afloat), [[0.0, 61.5], [0.0, 61.5]])
+
+
+def test_a_waypoint_repeating_the_one_before_is_passed_with_it() -> None:
+    """Paths joined end to start repeat their joint (a sea leg's last point is its ground path's
+    first): a robot past the joint by the pass rule, not within the capture radius, went back for
+    the repeat (and afloat, across the current); it is passed with the joint."""
+    routes = Routes(1)
+    routes.set(0, np.array([[0.0, 0.0], [0.0, 50.0], [0.0, 50.0], [0.0, 100.0]]))
+    routes.cursor[0] = routes.start[0] + 1
+    routes.advance(np.array([[1.5, 51.0]]), np.ones(1, bool))
+    assert routes.cursor[0] - routes.start[0] == 3

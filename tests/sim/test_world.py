@@ -13,6 +13,7 @@ from tiny_missions import write_mission
 
 from swarm.mission.load import load_mission
 from swarm.mission.plan import plan_mission
+from swarm.robot.terrain import GROUND_SUBMERSION
 from swarm.sim import world as world_module
 from swarm.sim.run import MissionLog, simulate, simulate_batch
 from swarm.sim.runview import MARK, RunView
@@ -39,7 +40,7 @@ TASKS = [
 HAZARDS = {
     "attrition": {"mtbf_h": 0.4},
     "mines": {"count": 5, "trigger_probability": 0.5},
-    "surf": {"wave_height_m": 0.8},
+    "surf": {"wave_height_m": 2.0},  # breakers that disable a robot now and then
 }
 PHASES = {
     "sea_transit": {"time_limit_s": 300},
@@ -278,7 +279,7 @@ def _numpy_targets(world: World) -> tuple[np.ndarray, np.ndarray]:
     xy = world.flat("robot_state")[:, :2]
     command = world.flat("command")
     done = world.routes.done()
-    steer = world.routes.steer_points(xy)
+    steer = world.routes.steer_points(xy, world.flat("submersion") > GROUND_SUBMERSION)
     gap = steer - xy
     off_station = np.hypot(gap[:, 0], gap[:, 1]) > world_module.STATION_KEEP_M
     follow = (command == FOLLOW) | (command == RETURN)
