@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 import shapely
+import shapely.ops
 from scipy.spatial import cKDTree
 from scipy.spatial.distance import cdist
 from shapely.geometry import LineString
@@ -84,6 +85,21 @@ def at_work_s(ashore_s: float, approach_m: float, speed_mps: float) -> float:
     the surf (and the drive to the track) as takeover time: the simulated survivors land when the
     plan's `ashore_s` says (within 40 s) and have that much less."""
     return ashore_s + approach_m / speed_mps
+
+
+def as_driven_ashore(ground: np.ndarray, landed: np.ndarray) -> np.ndarray:
+    """The ground route `ground` as a robot drives it from where its wheels grounded (`landed`:
+    each wave phase's, the mean of those that landed): straight back to the route, to its nearest
+    point, then on along it. The longshore current sets a robot down-current of its landfall
+    (mine_clear at 4 m breakers: 70-135 m), and that drive back across the beach is wheel-borne
+    exposure, and time, the planned route does not have."""
+    ok = np.isfinite(landed).all(axis=1)
+    if len(ground) < 2 or not ok.any():
+        return ground
+    at = shapely.Point(landed[ok].mean(axis=0))
+    line = LineString(ground)
+    rest = shapely.ops.substring(line, line.project(at), line.length)
+    return np.vstack([[at.x, at.y], np.asarray(rest.coords).reshape(-1, 2)])
 
 
 def polyline_m(points: np.ndarray) -> float:
@@ -202,7 +218,8 @@ def way_in(
     end = search.design["window_s"][1] if search is not None else mission.beach_end_s
     land = np.vstack([p.reshape(-1, 2) for p in (rp.ground_m, rp.track_m)])
     # the ground route ends where the track starts (`drivable`): the land is the two, end to end
-    approach, approach_inside = budget.driven_by_class(cm, rp.ground_m, mine_area)
+    ground = as_driven_ashore(rp.ground_m.reshape(-1, 2), drive.landed_m)
+    approach, approach_inside = budget.driven_by_class(cm, ground, mine_area)
     track, track_inside = budget.driven_by_class(cm, rp.track_m, mine_area)
     if search is not None:  # the lanes before have found some of the mines under the track
         track_inside *= 1.0 - _found_before(mission, search)

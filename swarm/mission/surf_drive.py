@@ -66,6 +66,7 @@ class WayIn(NamedTuple):
     hazard: np.ndarray  # sum over the breakers met of -log(1 - p) at their local height
     ashore: np.ndarray  # bool: grounded within the limit
     timed_out: np.ndarray  # bool: its time in the surf zone passed the limit first
+    landed_m: np.ndarray  # (phases, 2) where the wheels grounded, NaN where they did not
 
     @property
     def p_timeout(self) -> float:
@@ -144,6 +145,7 @@ def drive_in(mission: Mission, zone: SurfZone, routes: list[np.ndarray]) -> list
     submersion = np.zeros(n)  # the simulator's, until a first step reads the cell
     surf_s, hazard = np.zeros(n), np.zeros(n)
     ashore, timed_out = np.zeros(n, bool), np.zeros(n, bool)
+    landed = np.full((n, 2), np.nan)
     model = SkidModel(robot)
     subs = round(STEP_S / SUBSTEP_S)
     t = 0.0
@@ -166,13 +168,12 @@ def drive_in(mission: Mission, zone: SurfZone, routes: list[np.ndarray]) -> list
         cell = cells.of(state[:, :2])
         submersion = cells.buoyancy[cells.terrain[cell]]
         surf_s += np.where(live & (cells.height[cell] > 0), STEP_S, 0.0)
-        ashore |= live & (submersion < GROUND_SUBMERSION)
+        grounded = live & (submersion < GROUND_SUBMERSION)
+        landed[grounded] = state[grounded, :2]
+        ashore |= grounded
         timed_out |= live & ~ashore & (surf_s > limit)
-    k = WAVE_PHASES
-    return [
-        WayIn(surf_s[i : i + k], hazard[i : i + k], ashore[i : i + k], timed_out[i : i + k])
-        for i in range(0, n, k)
-    ]
+    k, each = WAVE_PHASES, (surf_s, hazard, ashore, timed_out, landed)
+    return [WayIn(*(a[i : i + k] for a in each)) for i in range(0, n, k)]
 
 
 def _shape(t_s: float, phase_s: np.ndarray, period_s: float) -> np.ndarray:

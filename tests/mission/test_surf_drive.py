@@ -132,6 +132,7 @@ def test_the_surf_s_losses_are_the_mean_of_the_wave_phases(landing_plan) -> None
         hazard=np.array([0.05, 0.2, 0.6, 0.9]),
         ashore=np.array([True, True, False, False]),
         timed_out=np.array([False, False, True, True]),
+        landed_m=np.array([[10.0, 40.0], [12.0, 41.0], [np.nan, np.nan], [np.nan, np.nan]]),
     )
     surf_s, per_hit, timeout = exposure.surf_terms(drive, mission.hazards.surf.wave_period_s)
     assert surf_s == pytest.approx(drive.surf_s.mean())
@@ -184,3 +185,18 @@ def test_landing_s_plan_agrees_with_its_runs_at_any_breakers(height_m: float) ->
     lost = [len(log.losses) for log in logs]
     low, high = count_mean_interval(lost, within=(0.0, mission.swarm.count))
     assert low <= plan.budget["expected_lost"] <= high
+
+
+def test_a_robot_set_down_current_drives_back_to_its_route_across_the_beach() -> None:
+    """Grounded 30 m down-current of its landfall, a robot drives straight to its ground route's
+    nearest point and on along it: that way ashore, not the planned one from the landfall, is the
+    beach exposure (the mean of the phases that landed; the ones that did not are left out)."""
+    ground = np.array([[0.0, 0.0], [0.0, 50.0], [20.0, 50.0]])
+    landed = np.array([[30.0, 9.0], [30.0, 11.0], [np.nan, np.nan]])
+    driven = exposure.as_driven_ashore(ground, landed)
+    np.testing.assert_allclose(driven, [[30.0, 10.0], [0.0, 10.0], [0.0, 50.0], [20.0, 50.0]])
+    assert exposure.polyline_m(driven) == pytest.approx(30.0 + 40.0 + 20.0)
+    # no phase landed, or no ground route: the planned one
+    assert exposure.as_driven_ashore(ground, np.full((2, 2), np.nan)) is ground
+    one = ground[:1]
+    assert exposure.as_driven_ashore(one, landed) is one
