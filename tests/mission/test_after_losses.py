@@ -19,24 +19,27 @@ from swarm.report.plan_report import plan_data
 REPO = Path(__file__).resolve().parents[2]
 
 
-def _mission(mtbf_h: float, **success: float):
-    raw = {
-        "name": "after_losses",
+def _eight_by_hand(name: str, surf_s: float, beach_s: float) -> dict:
+    """Eight robots put in by hand 20 m off test_small's beach: a mission's head."""
+    by_hand = {"platform": "by_hand", "points": ["launch_1", "launch_2"], "offshore_m": 20, "interval_s": 2}
+    return {
+        "name": name,
         "map": "../maps/test_small.yaml",
         "planner": "../planners/fast.yaml",
         "swarm": {"count": 8},
-        "launch": {
-            "platform": "by_hand",
-            "points": ["launch_1", "launch_2"],
-            "offshore_m": 20,
-            "interval_s": 2,
-        },
+        "launch": by_hand,
         "phases": {
             "sea_transit": {"time_limit_s": 150},
-            "surf_crossing": {"time_limit_s": 60},
-            "beach_operations": {"time_limit_s": 120},
-            "return_to_sea": {"enabled": True},
+            "surf_crossing": {"time_limit_s": surf_s},
+            "beach_operations": {"time_limit_s": beach_s},
         },
+    }
+
+
+def _mission(mtbf_h: float, **success: float):
+    raw = _eight_by_hand("after_losses", 60, 120)
+    raw["phases"]["return_to_sea"] = {"enabled": True}
+    raw |= {
         "tasks": [
             {
                 "type": "relay",
@@ -147,22 +150,7 @@ def _stranding_mission():
     longshore current sets them along the beach, and two searchers are still afloat when the limit
     runs out at every phase of the wave; the survivors' slack before the clearance is short of
     the two lost tracks."""
-    raw = {
-        "name": "surf_stranding",
-        "map": "../maps/test_small.yaml",
-        "planner": "../planners/fast.yaml",
-        "swarm": {"count": 8},
-        "launch": {
-            "platform": "by_hand",
-            "points": ["launch_1", "launch_2"],
-            "offshore_m": 20,
-            "interval_s": 2,
-        },
-        "phases": {
-            "sea_transit": {"time_limit_s": 150},
-            "surf_crossing": {"time_limit_s": 48},
-            "beach_operations": {"time_limit_s": 700},
-        },
+    raw = _eight_by_hand("surf_stranding", 48, 700) | {
         "tasks": [
             {
                 "type": "search",
