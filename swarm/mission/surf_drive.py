@@ -41,6 +41,7 @@ from swarm.robot.driving import (
     MAX_WHEEL_SPEED_FACTOR,
     DriveLimits,
     advance_cursors,
+    afloat,
     drive_toward,
     steer_points,
 )
@@ -154,9 +155,9 @@ def drive_in(mission: Mission, zone: SurfZone, routes: list[np.ndarray]) -> list
         if not live.any():
             break
         # the simulator's route follower and controller (`World.controller_commands`)
-        afloat = submersion > GROUND_SUBMERSION
-        advance_cursors(points, start, end, cursor, state[:, :2], live, afloat)
-        steer_points(points, start, end, cursor, state[:, :2], afloat, target)
+        boats = afloat(submersion)
+        advance_cursors(points, start, end, cursor, state[:, :2], live, boats)
+        steer_points(points, start, end, cursor, state[:, :2], boats, target)
         omega, jet, _ = drive_toward(state, target, cruise, submersion, upright, limits, live)
         for k in range(subs):
             t0 = t + k * SUBSTEP_S

@@ -20,6 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from swarm.mission import budget
+from swarm.mission.exposure import polyline_m
 from swarm.mission.plan import MissionPlan, detection_to_expect
 from swarm.planning.relay import relayed_links
 from swarm.report import plan_figures as figs
@@ -28,11 +29,6 @@ from swarm.studies import stats
 
 #: The verdict when nothing a plan can check applies.
 NO_VERDICT = "plan only: no verdict (only a simulation can tell whether the mission succeeds)"
-
-
-def _length(points: list) -> float:
-    xy = np.asarray(points, dtype=float).reshape(-1, 2)
-    return float(np.hypot(*np.diff(xy, axis=0).T).sum()) if len(xy) > 1 else 0.0
 
 
 def _robots(d: dict) -> list[dict]:
@@ -62,6 +58,7 @@ def _search(d: dict) -> list[dict]:
     out = []
     for s in d.get("search", []):
         design, b = s.get("design") or {}, after.get(s["task"], {})
+        tracks = [t for run in s.get("tracks_m", []) for t in run]
         out.append(
             {
                 "task": s["task"],
@@ -81,7 +78,7 @@ def _search(d: dict) -> list[dict]:
                 "window_s": design.get("window_s"),
                 "note": design.get("note", ""),
                 "swath_coverage": s["swath_coverage"],
-                "track_length_m": round(sum(_length(t) for run in s.get("tracks_m", []) for t in run), 1),
+                "track_length_m": round(sum(polyline_m(np.reshape(t, (-1, 2))) for t in tracks), 1),
             }
         )
     return out
@@ -283,14 +280,13 @@ def _verdict(checks: list[dict]) -> dict:
 
 
 def verdict_brief(v: dict) -> str:
-    """The verdict in a line for the terminal: what falls short, or that the plan meets what it can
-    check (the report lists every check)."""
+    """The verdict in a line for the terminal: what falls short or is not shown yet (the checks
+    not met, under their own lead), or that the plan meets what it can check (the report lists
+    every check)."""
     if v["status"] == "met":
         return v["text"].split(":")[0]
     if v["status"] == "none":
         return v["text"]
-    if v["status"] == "not shown":
-        return NOT_SHOWN + ": " + _verdict([c for c in v["checks"] if not c["met"]])["text"].split(": ", 1)[1]
     return _verdict([c for c in v["checks"] if not c["met"]])["text"]
 
 

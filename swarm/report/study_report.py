@@ -315,8 +315,12 @@ def figures(
     table: pa.Table, summary: dict, beach_map: BeachMap | None
 ) -> list[tuple[str, bytes | None, str]]:
     """(heading, PNG or None, what to say when it is None) of every figure, in report order."""
-    ran = [p for p in summary.get("points") or [] if not p.get("infeasible")]
-    return [(f.heading, f.make(), f.absent) for f in _figures(table, {**summary, "points": ran}, beach_map)]
+    return [(f.heading, f.make(), f.absent) for f in _figures(table, _ran(summary), beach_map)]
+
+
+def _ran(summary: dict) -> dict:
+    """`summary` with only the points that ran (the figures have nothing of an infeasible one)."""
+    return {**summary, "points": [p for p in summary.get("points") or [] if not p.get("infeasible")]}
 
 
 def _figures(
@@ -425,8 +429,7 @@ def study_report(
     losses = loss_rows(data)
     if losses:
         blocks.append(Table("Losses by cause and phase, all runs", losses))
-    ran = [p for p in summary.get("points") or [] if not p.get("infeasible")]
-    blocks += _figures(table, {**summary, "points": ran}, beach_map, no_map)
+    blocks += _figures(table, _ran(summary), beach_map, no_map)
     h = data["header"]
     return Report(
         "study",

@@ -35,7 +35,7 @@ import numba
 import numpy as np
 
 from swarm.robot.npmath import maximum, minimum
-from swarm.robot.terrain import JET_SUBMERSION
+from swarm.robot.terrain import GROUND_SUBMERSION, JET_SUBMERSION
 
 #: Thesis eq. 2.26: the effective track width of the skid-steered robot is d / 0.73.
 EFFECTIVE_TRACK_SCALE = 0.73
@@ -61,6 +61,12 @@ LOOKAHEAD_M = 1.5
 #: A leg's end counts as passed once the robot is beyond it along the leg and within this distance
 #: of the leg's line (m), so a robot pushed wide of a corner does not circle back for it.
 PASS_CROSS_TRACK_M = 2.0
+
+
+def afloat(submersion: np.ndarray) -> np.ndarray:
+    """Which robots the route follower steers as boats (`steer_point`): those whose wheels do not
+    ground, where the simulator's surf phase has not ended (`GROUND_SUBMERSION`)."""
+    return np.asarray(submersion) > GROUND_SUBMERSION
 
 
 @dataclass(frozen=True)

@@ -144,7 +144,8 @@ class Routes:
     def advance(self, xy: np.ndarray, mask: np.ndarray, afloat: np.ndarray | None = None) -> None:
         """Move the cursors of robots in `mask` past every waypoint they have reached (a few at
         most per step): within the capture radius of it, or past the end of its leg and close to
-        the leg's line (the final waypoint only by its radius)."""
+        the leg's line, or abeam of it at any distance where `afloat` (the final waypoint only by
+        its radius; `swarm.robot.driving.advance_cursors`)."""
         afloat = np.zeros(len(xy), bool) if afloat is None else afloat
         advance_cursors(self.points, self.start, self.end, self.cursor, xy, mask, afloat)
 
@@ -152,7 +153,8 @@ class Routes:
         """(n, 2) where each robot steers: on its route, `LOOKAHEAD_M` ahead of its projection on
         its current leg, capped at the leg's end (the waypoint itself on a route's first point);
         done with its route, the route's last point, where it keeps station; without a route,
-        its own position. What the built-in controller steers for."""
+        its own position; where `afloat`, along the leg's line (`swarm.robot.driving.steer_point`).
+        What the built-in controller steers for."""
         out = np.empty((len(xy), 2))
         afloat = np.zeros(len(xy), bool) if afloat is None else afloat
         steer_points(self.points, self.start, self.end, self.cursor, xy, afloat, out)

@@ -40,7 +40,7 @@ from numba.typed import List
 from scipy.spatial import cKDTree
 
 from swarm.errors import SwarmError
-from swarm.robot.driving import drive_toward, steer_point
+from swarm.robot.driving import afloat, drive_toward, steer_point
 from swarm.robot.terrain import GROUND_SUBMERSION
 from swarm.sim import comms, draws, hazards, sensing
 from swarm.sim.criteria import STATION_RADIUS_M, MissionScore
@@ -319,7 +319,7 @@ class World:
         target, moving = np.empty((len(state), 2)), np.empty(len(state), bool)
         _command_targets(
             r.points, r.start, r.end, r.cursor, state, self.flat("command"), self.flat("target_m"),
-            self.flat("alive"), self.flat("on_map"), self.flat("submersion"), target, moving,
+            self.flat("alive"), self.flat("on_map"), afloat(self.flat("submersion")), target, moving,
         )  # fmt: skip
         wheels, jet, _ = drive_toward(
             state,
@@ -401,7 +401,7 @@ class World:
         )  # fmt: skip
         hits = res.wave_hits.reshape(self.B, n) & moving
         self._flip(hits, res.wave_height_m.reshape(self.B, n))
-        self.routes.advance(state[:, :2], mv, self.flat("submersion") > GROUND_SUBMERSION)
+        self.routes.advance(state[:, :2], mv, afloat(self.flat("submersion")))
         self._update_phases(res.in_surf.reshape(self.B, n) & moving, live)
         self._release(going)
         self._sense(live)
@@ -845,17 +845,17 @@ def _take_step(
 
 @numba.njit(cache=True, error_model="numpy")
 def _command_targets(
-    points, start, end, cursor, state, command, target_m, alive, on_map, submersion, target, moving
+    points, start, end, cursor, state, command, target_m, alive, on_map, afloat, target, moving
 ):
     """`controller_commands`' target and whether each robot drives, robot by robot: a robot
     following its route (or returning, or on its way to a mark) steers along it (`steer_point`,
-    afloat where its submersion is above `GROUND_SUBMERSION`),
+    as a boat where `afloat`),
     a marker at its route's end closes in on its mine; one at the end of its route keeps station
     there, driving back once it has drifted `STATION_KEEP_M` off; loitering and relaying robots
     hold still."""
     for i in range(state.shape[0]):
         x, y, c = state[i, 0], state[i, 1], command[i]
-        tx, ty = steer_point(points, start[i], end[i], cursor[i], x, y, submersion[i] > GROUND_SUBMERSION)
+        tx, ty = steer_point(points, start[i], end[i], cursor[i], x, y, afloat[i])
         done = cursor[i] >= end[i]
         follow = c in (FOLLOW, RETURN)
         if follow or (c == MARK and not done):
