@@ -416,12 +416,18 @@ def losses_table(data: dict) -> list[list[str]]:
     return rows
 
 
+def _met_word(c: dict) -> str:
+    """A check's cell in the criteria table: a check that more runs would show is not yet met,
+    not failed (the verdict's `not shown`)."""
+    if c["met"]:
+        return "yes"
+    return "not yet" if c.get("runs_needed") else "NO"
+
+
 def check_table(data: dict) -> list[list[str]]:
     rows = [["criterion", "plan", "target", "met"]]
     for c in data["verdict"].get("checks", []):
-        rows.append(
-            [c["criterion"], _check_value(c, "value"), _check_value(c, "target"), "yes" if c["met"] else "NO"]
-        )
+        rows.append([c["criterion"], _check_value(c, "value"), _check_value(c, "target"), _met_word(c)])
     return rows
 
 

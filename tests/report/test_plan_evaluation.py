@@ -188,7 +188,7 @@ def test_runs_too_few_to_show_the_target_are_not_a_plan_that_falls_short() -> No
     put the Wilson lower bound at 0.68, under 0.9. The rate seen is above the target, so the runs
     have not shown it yet (about 35 would); a rate under the target, or a plan check that fails,
     is short."""
-    from swarm.report.plan_report import NOT_SHOWN, _verdict, verdict_brief
+    from swarm.report.plan_report import NOT_SHOWN, _verdict, check_table, verdict_brief
     from swarm.studies.stats import runs_for_lower_bound, wilson_interval
 
     def sim(successes: int, runs: int) -> dict:
@@ -211,6 +211,11 @@ def test_runs_too_few_to_show_the_target_are_not_a_plan_that_falls_short() -> No
         == f"{NOT_SHOWN}: P(success) in simulation 67.6% < 90.0% (about 35 runs would show it)"
     )
     assert _verdict([plan_check, sim(35, 35)])["status"] == "met"
+    # its criteria table says the same: not yet, where a failed check says NO
+    met = [row[-1] for row in check_table({"verdict": unshown})[1:]]
+    assert met == ["yes", "not yet"]
+    short = _verdict([{**plan_check, "value": 0.2, "met": False}, sim(7, 8)])
+    assert [row[-1] for row in check_table({"verdict": short})[1:]] == ["NO", "NO"]
     # 7 of 8 is a rate under 0.9: no number of runs shows it
     assert _verdict([plan_check, sim(7, 8)])["status"] == "not met"
     failing = {**plan_check, "value": 0.2, "met": False}
