@@ -15,6 +15,7 @@ from __future__ import annotations
 import copy
 
 import numpy as np
+import shapely
 from scipy import ndimage
 
 from swarm.planning.costmap import NO_TRACTION, CostMap, PlanningError
@@ -25,6 +26,11 @@ from swarm.planning.profiles import DEFAULT_PROFILE, PlannerProfile
 ATTEMPTS = 3
 #: Seeds of a route's attempts lie this far apart (the calls' seeds count up by one).
 SEED_STRIDE = 1_000_003
+#: A blocked stretch of a leg is driven round along its edge when free ground is this close to
+#: every point of it (m); farther, OMPL routes round it (`Router._around`).
+HUG_M = 10.0
+#: Most a straightened edge path may stray from the cell centres it joins (m).
+STRAIGHTEN_M = 0.3
 
 
 class Router:
@@ -140,12 +146,40 @@ class Router:
             else:
                 while not ok[j]:
                     j += 1
-                out.append(self.route(samples[i], samples[j])[1:])
+                out.append(self._around(samples[i], samples[i + 1 : j], samples[j])[1:])
             i = j
         pts = np.vstack(out)
         keep = np.ones(len(pts), bool)
         keep[1:] = np.hypot(*np.diff(pts, axis=0).T) > 1e-9
         return pts[keep]
+
+    def _around(self, a: np.ndarray, blocked: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """Points from free `a` to free `b` round the `blocked` points of a leg between them: along
+        the blocked ground's edge when every one of them has free ground within `HUG_M` (the
+        nearest free cell of each), so the robot sweeps the lane's free ground right up to the
+        edge, where mines on the blocked side are found from; OMPL where the edge path jumps
+        blocked ground (or the points lie deep inside it, a lagoon). An OMPL path round the whole
+        stretch is feasible, not close: on full_conops' top lanes, which graze the vegetation's
+        margin for tens of metres, it drove 1-4 m inside the free ground, and 100 runs found
+        97.4% of the mines against the plan's 98.7% (98.2% along the edge)."""
+        edge = self.snap_many(blocked)
+        if float(np.max(np.hypot(*(edge - blocked).T))) > HUG_M:
+            return self.route(a, b)
+        pts = np.vstack([a, edge, b])
+        pts = pts[np.r_[True, np.hypot(*np.diff(pts, axis=0).T) > 1e-9]]
+        free = self.cm.segments_free(pts[:-1], pts[1:])
+        out = [pts[:1]]
+        for k in range(1, len(pts)):
+            out.append(pts[k : k + 1] if free[k - 1] else self._step(pts[k - 1], pts[k]))
+        return _straightened(self.cm, np.vstack(out))
+
+    def _step(self, p: np.ndarray, q: np.ndarray) -> np.ndarray:
+        """Points after `p` to `q` where the straight step clips blocked ground: round the corner
+        of the cell between (a diagonal step along a stair of edge cells), else by `route`."""
+        for corner in (np.array([p[0], q[1]]), np.array([q[0], p[1]])):
+            if bool(np.all(self.cm.segments_free(np.vstack([p, corner]), np.vstack([corner, q])))):
+                return np.vstack([corner, q])
+        return self.route(p, q)[1:]
 
     def route(self, start: np.ndarray, goal: np.ndarray) -> np.ndarray:
         """Waypoints (k, 2) from `start` to `goal` (or to the nearest point of it a robot can reach)."""
@@ -159,3 +193,14 @@ class Router:
         if np.hypot(*(pts[-1] - goal)) > 1e-6:
             pts = np.vstack([pts, goal])
         return pts
+
+
+def _straightened(cm: CostMap, pts: np.ndarray) -> np.ndarray:
+    """`pts` with the cell-centre staircase of an edge path straightened (Douglas-Peucker within
+    `STRAIGHTEN_M`, shapely), where every straightened segment stays on free cells; else as given."""
+    if len(pts) < 3:
+        return pts
+    simple = np.asarray(shapely.LineString(pts).simplify(STRAIGHTEN_M, preserve_topology=False).coords)
+    if len(simple) >= 2 and bool(np.all(cm.segments_free(simple[:-1], simple[1:]))):
+        return simple
+    return pts

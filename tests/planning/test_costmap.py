@@ -6,6 +6,7 @@ import math
 
 import numpy as np
 import pytest
+import shapely
 from conftest import CELL_M, WALL_COL, wall_map
 
 from swarm.planning.costmap import (
@@ -333,3 +334,49 @@ def test_free_at_and_cell_at_are_is_free_and_cell_of_point_by_point(wall_costmap
     rows, cols = cm.cell_of(xs[:-1], ys[:-1])
     cells = np.array([cm.cell_at(float(x), float(y)) for x, y in zip(xs[:-1], ys[:-1], strict=True)])
     np.testing.assert_array_equal(cells, np.column_stack([rows, cols]))
+
+
+def test_a_leg_grazing_blocked_ground_is_driven_along_its_edge(robot):
+    """A search lane under a shallow tongue of driftwood (full_conops' top lanes graze the
+    vegetation's margin so for tens of metres): the stitched route keeps to the tongue's edge,
+    on free ground, so the robot sweeps the lane's free ground up to the edge, where an OMPL
+    path round the whole stretch drove metres inside it. A lagoon in the middle of a leg, too
+    wide to hug, is still routed round."""
+    rows, cols = 60, 200
+    yy, xx = np.mgrid[0:rows, 0:cols] + 0.5
+    terrain = np.zeros((rows, cols), np.int8)
+    terrain[yy >= 40.0 - 8.0 * np.clip(1.0 - np.abs(xx - 100.0) / 80.0, 0.0, 1.0)] = 1  # apex y = 32 m
+    bm = BeachMap(
+        "band", 1.0, (0.0, 0.0), ("wet_hard_sand", "driftwood"), terrain, np.zeros((rows, cols), np.float32)
+    )
+    cm = build_costmap(bm, robot)
+    a, b = np.array([10.5, 35.5]), np.array([190.5, 35.5])
+    pts, where = Router(cm, seed=0).stitch(np.array([a, b]))
+    assert where.tolist() == [0, len(pts) - 1]
+    assert cm.is_free(pts[:, 0], pts[:, 1]).all() and cm.segments_free(pts[:-1], pts[1:]).all()
+    route = shapely.LineString(pts)
+    lane = np.linspace(a, b, 721)
+    on_free = cm.is_free(lane[:, 0], lane[:, 1])
+    assert not on_free.all()
+
+    def edge_y(x: float) -> float:  # the highest free cell centre of the column
+        c = int(x)
+        return cm.center_of(int(np.flatnonzero(~cm.blocked[:, c])[-1]), c)[1]
+
+    # every free point of the lane is on the route, and where the lane is blocked the route
+    # keeps to the edge of the free ground, within a cell
+    assert shapely.distance(route, shapely.points(lane[on_free])).max() < 0.5
+    beside = shapely.points([(x, edge_y(x)) for x in lane[~on_free, 0]])
+    assert shapely.distance(route, beside).max() < 1.0
+
+    # a lagoon of driftwood 40 m across in the middle of a leg: round it, never through it
+    terrain = np.zeros((rows, cols), np.int8)
+    yy, xx = np.mgrid[0:rows, 0:cols]
+    terrain[(xx - 100) ** 2 + (yy - 30) ** 2 < 20**2] = 1
+    bm = BeachMap(
+        "ring", 1.0, (0.0, 0.0), ("wet_hard_sand", "driftwood"), terrain, np.zeros((rows, cols), np.float32)
+    )
+    cm = build_costmap(bm, robot)
+    pts, _ = Router(cm, seed=0).stitch(np.array([[10.5, 30.5], [190.5, 30.5]]))
+    assert cm.is_free(pts[:, 0], pts[:, 1]).all()  # OMPL's path, checked at its own resolution
+    assert np.hypot(*np.diff(pts, axis=0).T).sum() < 230.0  # round one side, not a wander

@@ -129,7 +129,11 @@ def test_the_robots_lost_in_each_phase_are_the_plan_s_expected_losses(name: str,
         )
     for task, search in plan.budget["search"].items():  # the same runs find what the plan expects
         found = np.array([log.outcome["criteria"]["detection"]["value"] for log in logs])
-        se = found.std(ddof=1) / np.sqrt(len(found))
+        # no less than the plan's own binomial spread: 16 runs that all find every mine have no
+        # spread of their own (at 98.7% of 12.5 mines, all 16 runs do so about one time in 14)
+        p = search["expected_detection_after_losses"]
+        mines = np.array([max(len(log.mines_m), 1) for log in logs])
+        se = max(found.std(ddof=1), float(np.sqrt(np.mean(p * (1 - p) / mines)))) / np.sqrt(len(found))
         assert abs(found.mean() - search["expected_detection_after_losses"]) <= 3 * se + 0.005, (
             task,
             found.mean(),
