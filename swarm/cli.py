@@ -6,10 +6,13 @@ import argparse
 import contextlib
 import json
 import math
+import multiprocessing
 import os
+import signal
 import sys
 import tempfile
-from collections.abc import Sequence
+import threading
+from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import NoReturn
 
@@ -1376,18 +1379,54 @@ def _points_joined(argv: Sequence[str]) -> list[str]:
     return out
 
 
+class Terminated(KeyboardInterrupt):
+    """SIGTERM (`kill`, `timeout`, a batch scheduler's stop), raised in the main thread so it
+    unwinds as Ctrl-C does: worker pools shut down, no worker left running."""
+
+
+def _terminated(signum: int, frame: object) -> NoReturn:
+    raise Terminated
+
+
+@contextlib.contextmanager
+def _sigterm_unwinds() -> Iterator[None]:
+    """SIGTERM raises `Terminated` while a command runs (the main thread only; the handler before
+    is put back). Its default ends this process alone: a study's or an evaluation's workers, in
+    a pool under a forkserver, went on at full load with nobody to read their rows."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    before = signal.signal(signal.SIGTERM, _terminated)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, before)
+
+
+def _stop_workers() -> None:
+    """End the worker processes this process started (pools' workers, under the forkserver too):
+    a pool shut down without waiting leaves them on their current task; Ctrl-C reaches them
+    through the terminal's process group, SIGTERM does not."""
+    for child in multiprocessing.active_children():
+        child.terminate()
+    for child in multiprocessing.active_children():
+        child.join(timeout=5)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     given = list(sys.argv[1:] if argv is None else argv)
     args = _parser().parse_args(_points_joined(given))
     args.command_line = " ".join(["swarm", *given])
     try:
-        return args.handler(args)
+        with _sigterm_unwinds():
+            return args.handler(args)
     except SwarmError as exc:
         print(f"swarm: error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
-    except KeyboardInterrupt:
-        print("swarm: interrupted", file=sys.stderr)
-        return 130
+    except KeyboardInterrupt as exc:
+        _stop_workers()
+        print(f"swarm: {'terminated' if isinstance(exc, Terminated) else 'interrupted'}", file=sys.stderr)
+        return 143 if isinstance(exc, Terminated) else 130
     except BrokenPipeError:  # `swarm ... | head`: the reader has gone, nothing to say to it
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())  # Python's own recipe
         return 1

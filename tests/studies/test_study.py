@@ -121,24 +121,32 @@ def test_the_table_does_not_depend_on_the_worker_count_or_order(reference, tmp_p
     assert _stable(reordered).equals(_stable(table))
 
 
+def _study_in_a_session(tiny: Path, out: Path, runs: int, stderr: int) -> subprocess.Popen:
+    """`swarm study` of the tiny mission, 2 points on 2 workers, as a new session's leader."""
+    code = "import sys; from swarm.cli import main; sys.exit(main(sys.argv[1:]))"
+    argv = [sys.executable, "-c", code, "study", str(tiny), "--runs", str(runs), "--sweep", "swarm.count=2,3",
+            "--seed", "7", "--workers", "2", "--out", str(out)]  # fmt: skip
+    return subprocess.Popen(argv, stdout=subprocess.DEVNULL, stderr=stderr, text=True, start_new_session=True)
+
+
+def _wait_for_a_part(proc: subprocess.Popen, out: Path) -> None:
+    """Until the study has a chunk of rows on disk (its workers busy with the rest)."""
+    deadline = time.monotonic() + 120
+    while not list((out / "parts").glob("part-*.parquet")):
+        assert proc.poll() is None, "the study ended before it could be stopped"
+        assert time.monotonic() < deadline
+        time.sleep(0.05)
+
+
 @pytest.mark.slow
 def test_a_study_killed_mid_way_resumes_to_the_same_table(reference, tiny, tmp_path) -> None:
     """kill -9 the whole process group once a chunk is on disk; the same command then finishes the
     study with exactly the uninterrupted table (and does not rerun what was stored)."""
     spec, expected = reference
     out = tmp_path / "killed"
-    code = "import sys; from swarm.cli import main; sys.exit(main(sys.argv[1:]))"
-    argv = [sys.executable, "-c", code, "study", str(tiny), "--runs", "5", "--sweep", "swarm.count=2,3",
-            "--seed", "7", "--workers", "2", "--out", str(out)]  # fmt: skip
-    proc = subprocess.Popen(
-        argv, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True
-    )
+    proc = _study_in_a_session(tiny, out, runs=5, stderr=subprocess.DEVNULL)
     try:
-        deadline = time.monotonic() + 120
-        while not list((out / "parts").glob("part-*.parquet")):
-            assert proc.poll() is None, "the study ended before it could be killed"
-            assert time.monotonic() < deadline
-            time.sleep(0.05)
+        _wait_for_a_part(proc, out)
     finally:
         with contextlib.suppress(ProcessLookupError):
             os.killpg(proc.pid, signal.SIGKILL)
@@ -151,6 +159,45 @@ def test_a_study_killed_mid_way_resumes_to_the_same_table(reference, tiny, tmp_p
     assert calls[0] == (kept, 10)  # it starts from what was kept
     assert _stable(table).equals(_stable(expected))
     assert _stable(pq.read_table(out / "results.parquet")).equals(_stable(expected))
+
+
+def _session_processes(sid: int) -> list[int]:
+    """Pids of the processes in session `sid` (Linux /proc: field 6 of stat)."""
+    out = []
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        with contextlib.suppress(OSError):
+            fields = stat.read_text().rsplit(")", 1)[1].split()
+            if int(fields[3]) == sid:
+                out.append(int(stat.parent.name))
+    return out
+
+
+@pytest.mark.slow
+def test_a_study_sent_sigterm_stops_its_workers_too(tiny, tmp_path) -> None:
+    """`kill PID` (SIGTERM to the CLI alone, as `timeout` and batch schedulers send it) used to end
+    the main process only: its pool's workers, under a forkserver, went on at full load with
+    nobody to read their rows. Now the study unwinds as on Ctrl-C: exit 143, one line, and no
+    process of its session left; what is on disk resumes (the test above)."""
+    out = tmp_path / "termed"
+    proc = _study_in_a_session(tiny, out, runs=20, stderr=subprocess.PIPE)
+    try:
+        _wait_for_a_part(proc, out)
+        assert len(_session_processes(proc.pid)) >= 3  # the CLI, the forkserver, workers
+        proc.send_signal(signal.SIGTERM)
+        _, err = proc.communicate(timeout=30)
+        assert proc.returncode == 143
+        assert err.strip().splitlines()[-1].endswith("swarm: terminated")
+        assert "Traceback" not in err
+        deadline = time.monotonic() + 10
+        while _session_processes(proc.pid) and time.monotonic() < deadline:
+            time.sleep(0.1)
+        assert _session_processes(proc.pid) == []
+    finally:
+        for pid in _session_processes(proc.pid):
+            with contextlib.suppress(ProcessLookupError):
+                os.kill(pid, signal.SIGKILL)
+        proc.wait()
+    assert not (out / "results.parquet").exists()
 
 
 def test_the_table_is_the_same_one_run_at_a_time_and_in_batches(tiny, tmp_path) -> None:
