@@ -148,10 +148,7 @@ class Router:
                     j += 1
                 out.append(self._around(samples[i], samples[i + 1 : j], samples[j])[1:])
             i = j
-        pts = np.vstack(out)
-        keep = np.ones(len(pts), bool)
-        keep[1:] = np.hypot(*np.diff(pts, axis=0).T) > 1e-9
-        return pts[keep]
+        return _without_repeats(np.vstack(out))
 
     def _around(self, a: np.ndarray, blocked: np.ndarray, b: np.ndarray) -> np.ndarray:
         """Points from free `a` to free `b` round the `blocked` points of a leg between them: along
@@ -165,8 +162,7 @@ class Router:
         edge = self.snap_many(blocked)
         if float(np.max(np.hypot(*(edge - blocked).T))) > HUG_M:
             return self.route(a, b)
-        pts = np.vstack([a, edge, b])
-        pts = pts[np.r_[True, np.hypot(*np.diff(pts, axis=0).T) > 1e-9]]
+        pts = _without_repeats(np.vstack([a, edge, b]))
         free = self.cm.segments_free(pts[:-1], pts[1:])
         out = [pts[:1]]
         for k in range(1, len(pts)):
@@ -193,6 +189,13 @@ class Router:
         if np.hypot(*(pts[-1] - goal)) > 1e-6:
             pts = np.vstack([pts, goal])
         return pts
+
+
+def _without_repeats(pts: np.ndarray) -> np.ndarray:
+    """`pts` without a point that repeats the one before it (edge cells several samples share)."""
+    keep = np.ones(len(pts), bool)
+    keep[1:] = np.hypot(*np.diff(pts, axis=0).T) > 1e-9
+    return pts[keep]
 
 
 def _straightened(cm: CostMap, pts: np.ndarray) -> np.ndarray:
