@@ -19,8 +19,11 @@ rates the simulator draws from (`swarm.sim.hazards`):
   (`swarm.mission.surf_speed`);
 - surf timeout: the share of the wave's phases at which that drive is still in the surf zone when
   `surf_crossing.time_limit_s` runs out, among those the breakers have not disabled first;
-- immobilization: per_km x mode factor x (1 + (slip / 0.3)^2) per metre on each class, with each
-  mode's steady slip at cruise (the cost map's mode speeds);
+- immobilization: per_km x mode factor x (1 + (slip / 0.3)^2) per metre on each class whose
+  wheels touch the ground (buoyancy below 1: the swash and the surf too, as the simulator), with
+  each mode's steady slip at cruise (the cost map's mode speeds); on the way in, afloat among the
+  breakers until the wheels ground, the metres and slips of that drive (`surf_drive`: the breakers
+  surge a robot back and forth over the bed, its wheels spinning);
 - rock: damage_per_km per metre on rock, and hidden rocks met per metre on land (hidden_per_ha x
   twice the contact radius, as mines) x collision_damage_probability;
 - mine: mines met per metre (density x twice the trigger radius) x the chance the sensor has not
@@ -158,6 +161,11 @@ class Exposure:
     #: chance the way in is still among the breakers when the surf crossing's time limit runs out
     #: (`swarm.mission.surf_drive`), among those the breakers have not taken by then
     surf_timeout: float = 0.0
+    #: metres ashore on wheels in water whose bed the wheels touch (the swash, shallow water), by
+    #: class: no wheel-borne hazard but getting stuck counts them (`driven_m` is dry ground)
+    wet_m: dict[str, float] = field(default_factory=dict)
+    #: -log(1 - p) of getting stuck among the breakers on the way in (`surf_drive.WayIn.stuck`)
+    surf_stuck_hazard: float = 0.0
 
 
 def surf_cells(mission: Mission) -> np.ndarray:
@@ -243,6 +251,25 @@ def undetected_at_contact(mission: Mission, speed_mps: float = 0.0) -> float:
     return 0.0 if sensor.width_m / 2.0 > r else 1.0
 
 
+def immobilization_per_m(mission: Mission, classes) -> np.ndarray:
+    """The chance per metre of getting stuck on each of the terrain classes `classes` at no slip:
+    per_km x mode factor where the wheels touch the ground (a mode's buoyancy below 1), 0 afloat
+    (the simulator's rule, `swarm.sim.hazards`)."""
+    imm, lib = mission.hazards.immobilization, mission.terrain_library
+    return np.array(
+        [
+            imm.per_km / 1000.0 * imm.mode_factors.get(c, 1.0) if lib[c].buoyancy_fraction < 1.0 else 0.0
+            for c in classes
+        ]
+    )
+
+
+def slip_factor(slip: np.ndarray) -> np.ndarray:
+    """How much slip multiplies the immobilization rate: 1 + (slip / `SLIP_SCALE`)^2, slip in [0, 1]."""
+    s = np.clip(slip, 0.0, 1.0) / SLIP_SCALE
+    return 1.0 + s * s
+
+
 def robot_losses(mission: Mission, cm: CostMap, exposure: Exposure) -> dict[str, dict[str, float]]:
     """Probability the robot is lost in each phase, by cause (module docstring)."""
     out: dict[str, dict[str, float]] = {p: {} for p in PHASE_NAMES}
@@ -275,13 +302,16 @@ def robot_losses(mission: Mission, cm: CostMap, exposure: Exposure) -> dict[str,
     for cls, metres in exposure.driven_m.items():
         if lib[cls].is_water:
             continue
-        s = min(max(slip.get(cls, 0.0), 0.0), 1.0)
-        factor = hz.immobilization.mode_factors.get(cls, 1.0) * (1.0 + (s / SLIP_SCALE) ** 2)
-        stuck += hz.immobilization.per_km / 1000.0 * factor * metres
         rock += hidden_per_m * metres
         if cls == "rock":
             rock += hz.rocks.damage_per_km / 1000.0 * metres
+    for by_class in (exposure.driven_m, exposure.wet_m):
+        for cls, metres in by_class.items():
+            per_m = immobilization_per_m(mission, (cls,))[0]
+            stuck += per_m * float(slip_factor(np.float64(slip.get(cls, 0.0)))) * metres
     out["beach"]["immobilized"] = -math.expm1(-stuck)
+    if exposure.surf_stuck_hazard > 0:
+        out["surf"]["immobilized"] = -math.expm1(-exposure.surf_stuck_hazard)
     out["beach"]["rock"] = -math.expm1(-rock)
     areas = mine_areas(mission)
     n_mines = expected_mine_count(mission)

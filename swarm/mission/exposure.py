@@ -150,6 +150,12 @@ def _dry(mission: Mission, by_class: dict[str, float]) -> dict[str, float]:
     return {c: v for c, v in by_class.items() if not mission.terrain_library[c].is_water}
 
 
+def _wet(mission: Mission, by_class: dict[str, float]) -> dict[str, float]:
+    """Metres by class, on water whose bed the wheels touch (`budget.Exposure.wet_m`)."""
+    lib = mission.terrain_library
+    return {c: v for c, v in by_class.items() if lib[c].is_water and lib[c].buoyancy_fraction < 1.0}
+
+
 def _mean_hazard(*crossings: Crossing) -> float:
     """One breaker's hazard over several crossings, averaged by their time."""
     seconds = sum(c.seconds for c in crossings)
@@ -211,6 +217,8 @@ def way_in(
     _, wading = zone.landfall(way)
     swash = zone.crossing(wading)
     surf_s, per_hit, timeout = surf_terms(drive, mission.hazards.surf.wave_period_s)
+    # stuck among the breakers, as a survival chance over the wave's phases
+    surf_stuck = -math.log(float(np.exp(-drive.stuck).mean()))
     landed = drive.surf_s[drive.ashore]
     arrive = rp.release_s + rp.sea_time_s  # the schedule swims the sea leg at swim speed
     ashore_s = arrive + max((float(landed.mean()) if len(landed) else surf_s) - leg.seconds, 0.0)
@@ -223,6 +231,7 @@ def way_in(
     track, track_inside = budget.driven_by_class(cm, rp.track_m, mine_area)
     if search is not None:  # the lanes before have found some of the mines under the track
         track_inside *= 1.0 - _found_before(mission, search)
+    wet_approach, wet_track = _wet(mission, approach), _wet(mission, track)
     approach, track = _dry(mission, approach), _dry(mission, track)
     speed = search.design.get("speed_mps") if search is not None else None
     wet = zone.crossing(rp.track_m, budget.ground_speed(mission, speed))
@@ -237,6 +246,8 @@ def way_in(
         beach_surf_s=wet.seconds + swash.seconds,
         beach_breaker_hazard=_mean_hazard(wet, swash),
         surf_timeout=timeout,
+        wet_m=add_metres(wet_approach, wet_track),
+        surf_stuck_hazard=surf_stuck,
     )
     last = (land if len(land) else way)[-1]
     before, on_track = None, None
@@ -249,7 +260,9 @@ def way_in(
     if len(rp.track_m):
         before_s = min(sum(approach.values()) / v, exposure.beach_s)
         track_s = min(sum(track.values()) / v, exposure.beach_s - before_s)
-        before = budget.Exposure(0.0, 0.0, before_s, approach, approach_inside, speed_mps=speed)
+        before = budget.Exposure(
+            0.0, 0.0, before_s, approach, approach_inside, speed_mps=speed, wet_m=wet_approach
+        )
         on_track = dataclasses.replace(
             exposure,
             sea_s=0.0,
@@ -258,6 +271,8 @@ def way_in(
             driven_m=track,
             in_mine_area_m=track_inside,
             surf_timeout=0.0,
+            wet_m=wet_track,
+            surf_stuck_hazard=0.0,
         )
     return WayIn(
         exposure=exposure,
@@ -422,11 +437,13 @@ def way_back(
     (`SurfZone.crossing`)."""
     way = way_out.route(router, start)
     surf = zone.crossing(way)
-    dry = _dry(mission, budget.driven_by_class(cm, way, None)[0])
+    by_class = budget.driven_by_class(cm, way, None)[0]
+    dry = _dry(mission, by_class)
     return budget.Exposure(
         sea_s=0.0,
         surf_s=surf.seconds,
         beach_s=sum(dry.values()) / mission.robot.wheel_speed_mps,
         driven_m=dry,
         breaker_hazard=surf.hazard_per_hit,
+        wet_m=_wet(mission, by_class),
     )

@@ -35,6 +35,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from swarm.mission import budget
 from swarm.mission.schema import Mission
 from swarm.mission.surf_speed import SurfZone
 from swarm.robot.driving import (
@@ -46,7 +47,7 @@ from swarm.robot.driving import (
     steer_points,
 )
 from swarm.robot.params import GRAVITY_MPS2
-from swarm.robot.skid import COEFFICIENTS, HEADING, SkidModel, U, V, X, Y
+from swarm.robot.skid import COEFFICIENTS, HEADING, SkidModel, U, V, X, Y, mean_wheel_slip
 from swarm.robot.terrain import GROUND_SUBMERSION
 from swarm.world.coastal import MIN_DEPTH_M, WAVE_SKEW
 
@@ -68,6 +69,9 @@ class WayIn(NamedTuple):
     ashore: np.ndarray  # bool: grounded within the limit
     timed_out: np.ndarray  # bool: its time in the surf zone passed the limit first
     landed_m: np.ndarray  # (phases, 2) where the wheels grounded, NaN where they did not
+    #: -log(1 - p) of getting stuck on the way, the simulator's rate (`budget.immobilization_per_m`
+    #: x `budget.slip_factor`) over each step's distance, its slip and the class it ends on
+    stuck: np.ndarray
 
     @property
     def p_timeout(self) -> float:
@@ -102,6 +106,8 @@ class _Cells:
         self.wave_x = (amplitude * shoreward[..., 0]).ravel()
         self.wave_y = (amplitude * shoreward[..., 1]).ravel()
         self.height = heights.ravel()
+        self.stuck_per_m = budget.immobilization_per_m(mission, bm.terrain_classes)
+        self.wheel_m = robot.wheel_radius_m * self.coef["rolling_radius_scale"]
         p = mission.hazards.surf.damage_probability(self.height)
         self.hit_hazard = np.where(self.height > 0, -np.log1p(-np.minimum(p, 1.0 - 1e-12)), 0.0)
 
@@ -144,7 +150,7 @@ def drive_in(mission: Mission, zone: SurfZone, routes: list[np.ndarray]) -> list
     state[:, HEADING] = np.arctan2(first[:, 1], first[:, 0])
     target, upright = np.empty((n, 2)), np.zeros(n, bool)
     submersion = np.zeros(n)  # the simulator's, until a first step reads the cell
-    surf_s, hazard = np.zeros(n), np.zeros(n)
+    surf_s, hazard, stuck = np.zeros(n), np.zeros(n), np.zeros(n)
     ashore, timed_out = np.zeros(n, bool), np.zeros(n, bool)
     landed = np.full((n, 2), np.nan)
     model = SkidModel(robot)
@@ -159,21 +165,28 @@ def drive_in(mission: Mission, zone: SurfZone, routes: list[np.ndarray]) -> list
         advance_cursors(points, start, end, cursor, state[:, :2], live, boats)
         steer_points(points, start, end, cursor, state[:, :2], boats, target)
         omega, jet, _ = drive_toward(state, target, cruise, submersion, upright, limits, live)
+        metres, slip = np.zeros(n), np.zeros(n)
         for k in range(subs):
             t0 = t + k * SUBSTEP_S
             cell = cells.of(state[:, :2])
             crest = np.floor((t0 + SUBSTEP_S - phase) / period) > np.floor((t0 - phase) / period)
             hazard += np.where(live & crest, cells.hit_hazard[cell], 0.0)
-            state = _substep(model, cells, state, omega, jet, cell, _shape(t0, phase, period))
+            new = _substep(model, cells, state, omega, jet, cell, _shape(t0, phase, period))
+            metres += np.hypot(new[:, X] - state[:, X], new[:, Y] - state[:, Y])
+            w = 0.5 * (omega[:, 0] + omega[:, 1]) * cells.wheel_m[cells.terrain[cell]]
+            slip += mean_wheel_slip(w, new[:, U])
+            state = new
         t += STEP_S
         cell = cells.of(state[:, :2])
+        per_m = cells.stuck_per_m[cells.terrain[cell]]
+        stuck += np.where(live, per_m * budget.slip_factor(slip / subs) * metres, 0.0)
         submersion = cells.buoyancy[cells.terrain[cell]]
         surf_s += np.where(live & (cells.height[cell] > 0), STEP_S, 0.0)
         grounded = live & (submersion < GROUND_SUBMERSION)
         landed[grounded] = state[grounded, :2]
         ashore |= grounded
         timed_out |= live & ~ashore & (surf_s > limit)
-    k, each = WAVE_PHASES, (surf_s, hazard, ashore, timed_out, landed)
+    k, each = WAVE_PHASES, (surf_s, hazard, ashore, timed_out, landed, stuck)
     return [WayIn(*(a[i : i + k] for a in each)) for i in range(0, n, k)]
 
 

@@ -85,6 +85,26 @@ REGULARIZATION_SPEED_MPS = 0.02
 
 X, Y, HEADING, U, V, R = range(6)
 
+#: Wheel surface speed below which `mean_wheel_slip` is 0, m/s.
+SLIP_MIN_SPEED_MPS = 0.05
+
+
+def mean_wheel_slip(w: np.ndarray, u: np.ndarray) -> np.ndarray:
+    """Longitudinal slip of the mean wheel, surface speed `w`, at body speed `u`: sign(w) (w - u) /
+    max(|w|, |u|) clipped to [0, 1] (0 when the robot outruns its wheels, 1 when it moves against
+    them; reversing counts like driving forward), 0 below `SLIP_MIN_SPEED_MPS`. What the hazards'
+    immobilization rate grows with, so the simulator's physics and the plan's drive through the
+    surf compute it alike."""
+    aw = np.abs(w)
+    ratio = np.sign(w)
+    ratio *= u
+    np.subtract(aw, ratio, out=ratio)
+    ratio /= np.maximum(np.maximum(aw, np.abs(u)), SLIP_MIN_SPEED_MPS)
+    np.minimum(ratio, 1.0, out=ratio)
+    np.maximum(ratio, 0.0, out=ratio)
+    ratio[aw < SLIP_MIN_SPEED_MPS] = 0.0
+    return ratio
+
 
 def coeffs_for(modes: TerrainMode | list[TerrainMode]) -> dict[str, np.ndarray]:
     """Coefficient arrays (n,) for one mode per robot (or one mode for a single robot)."""

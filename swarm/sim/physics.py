@@ -93,7 +93,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from swarm.robot.params import GRAVITY_MPS2, RobotParams
-from swarm.robot.skid import HEADING, SkidModel, U, V, X, Y
+from swarm.robot.skid import HEADING, SLIP_MIN_SPEED_MPS, SkidModel, U, V, X, Y, mean_wheel_slip
 from swarm.robot.terrain import COEFFICIENTS, TerrainLibrary
 from swarm.sim import physics_kernels as kernels
 from swarm.sim.physics_kernels import (
@@ -134,8 +134,6 @@ ETA_JET = 0.5
 SEAWATER_DENSITY_KGPM3 = 1025.0
 #: Jet nozzle area, m^2 (assumed: a ~50 mm nozzle).
 JET_NOZZLE_AREA_M2 = 0.002
-#: Wheel surface speed below which slip is reported as 0, m/s.
-SLIP_MIN_SPEED_MPS = 0.05
 
 
 _JET_W_PER_N15 = 1.0 / math.sqrt(2.0 * SEAWATER_DENSITY_KGPM3 * JET_NOZZLE_AREA_M2) / ETA_JET
@@ -450,16 +448,7 @@ class Physics:
             # longitudinal slip of the mean wheel, signed along the wheels' drive direction
             w = mean_omega * coef[RADIUS_SCALE]
             w *= self.robot.wheel_radius_m
-            un = new[:, U]
-            aw = np.abs(w)
-            ratio = np.sign(w)
-            ratio *= un
-            np.subtract(aw, ratio, out=ratio)
-            ratio /= np.maximum(np.maximum(aw, np.abs(un)), SLIP_MIN_SPEED_MPS)
-            np.minimum(ratio, 1.0, out=ratio)
-            np.maximum(ratio, 0.0, out=ratio)
-            ratio[aw < SLIP_MIN_SPEED_MPS] = 0.0
-            slip += ratio
+            slip += mean_wheel_slip(w, new[:, U])
 
             crest = crests[k, 0] if run is None else crests[k][run]
             hits |= (props[SURF] > 0.0) & crest

@@ -17,6 +17,8 @@ from swarm.robot.driving import DriveLimits, drive_toward
 from swarm.robot.terrain import GROUND_SUBMERSION
 from swarm.sim import setup
 from swarm.sim.env import SimConfig
+from swarm.sim.hazards import RATE_CAUSES, HazardInputs, HazardModel
+from swarm.sim.mines import MineField
 from swarm.sim.physics import Physics, SeaState
 from swarm.sim.routes import Routes
 from swarm.sim.run import simulate_batch
@@ -46,8 +48,9 @@ def _ways_in(mission, plan) -> list[np.ndarray]:
 
 def _simulated_ways_in(mission, lines: list[np.ndarray], phases: np.ndarray):
     """The same ways in driven by the simulator's classes (`Physics`, `drive_toward`, `Routes`),
-    hazards and flips left out: each one's seconds in the surf zone until its wheels ground or
-    the limit passes, and whether it passed."""
+    flips left out and no robot lost: each one's seconds in the surf zone until its wheels ground
+    or the limit passes, whether it passed, and the integral of its immobilization rate until
+    then (`HazardModel.rates_per_s`)."""
     cfg = SimConfig()
     swim = mission.robot.swim_speed_mps
     jet = mission.robot.jet_thrust_n or mission.terrain_library.default_jet_thrust_n(swim)
@@ -70,6 +73,10 @@ def _simulated_ways_in(mission, lines: list[np.ndarray], phases: np.ndarray):
     limit = mission.phases.surf_crossing.time_limit_s
     wave_phase, each = np.tile(phases, len(lines)), np.arange(n)  # each robot a run of its own
     dt = cfg.dt_s
+    bm = mission.beach_map
+    hazards = HazardModel(mission.hazards, mission.phases, bm.terrain_classes, mission.terrain_library,
+                          MineField(np.empty((0, 2))), np.empty((0, 2)), n)  # fmt: skip
+    stuck = np.zeros(n)
     for step in range(int(2 * limit / dt)):
         afloat = submersion > GROUND_SUBMERSION
         follow.advance(state[:, :2], np.ones(n, bool), afloat)
@@ -80,12 +87,20 @@ def _simulated_ways_in(mission, lines: list[np.ndarray], phases: np.ndarray):
         state, submersion = res.state, res.submersion
         live = ~done & ~timed_out
         surf_s += np.where(live & res.in_surf, dt, 0.0)
+        no, zero = np.zeros(n, bool), np.zeros(n)
+        inputs = HazardInputs(
+            t_s=(step + 1) * dt, dt_s=dt, alive=live, at_sea=no, xy=state[:, :2], terrain=res.terrain,
+            distance_m=res.distance_m, slip=res.slip, driving=live, wave_hits=no,
+            obstacle_hit=np.full(n, -1), energy_wh=np.ones(n), sea_time_s=zero, surf_time_s=surf_s,
+            isolated_s=zero, radio_ok=~no,
+        )  # fmt: skip
+        stuck += hazards.rates_per_s(inputs)[:, RATE_CAUSES.index("immobilized")] * dt
         done |= live & (submersion < GROUND_SUBMERSION)
         timed_out |= live & ~done & (surf_s > limit)
         if (done | timed_out).all():
             break
     k = len(phases)
-    return surf_s.reshape(-1, k), timed_out.reshape(-1, k)
+    return surf_s.reshape(-1, k), timed_out.reshape(-1, k), stuck.reshape(-1, k)
 
 
 def test_the_drive_steps_as_the_simulator_does() -> None:
@@ -104,7 +119,9 @@ def test_the_way_in_is_the_simulator_s() -> None:
     """landing's ways in at 4 m breakers with 100 s to cross the surf, driven by the simulator's
     physics, controller and route follower at the drive's wave phases: the same robots run out of
     time at the same phases (the longest ways in take 98 to 136 s), and the others are among the
-    breakers as long, phase by phase."""
+    breakers as long, phase by phase, and as likely to get stuck there: the breakers surge them
+    over the bed, wheels spinning (the plan counted no such loss; 0.19 robots a run in 32 runs of
+    mine_clear at 4 m)."""
     mission = _landing(4.0, **{"phases.surf_crossing.time_limit_s": 100})
     plan = plan_mission(mission, seed=mission.seed, workers=1)
     lines = _ways_in(mission, plan)
@@ -112,13 +129,16 @@ def test_the_way_in_is_the_simulator_s() -> None:
     drives = surf_drive.drive_in(mission, zone, lines)
     period = mission.hazards.surf.wave_period_s
     phases = np.arange(surf_drive.WAVE_PHASES) * period / surf_drive.WAVE_PHASES
-    simulated_s, simulated_out = _simulated_ways_in(mission, lines, phases)
+    simulated_s, simulated_out, simulated_stuck = _simulated_ways_in(mission, lines, phases)
     planned_out = np.array([d.timed_out for d in drives])
     assert planned_out.any() and not planned_out.all()
     assert np.array_equal(planned_out, simulated_out)
     planned_s = np.array([d.surf_s for d in drives])
     landed = ~planned_out
     assert planned_s[landed] == pytest.approx(simulated_s[landed], abs=2 * surf_drive.STEP_S)
+    planned_stuck = np.array([d.stuck for d in drives])
+    assert simulated_stuck[landed].min() > 0.0
+    assert planned_stuck[landed] == pytest.approx(simulated_stuck[landed], rel=0.05)
 
 
 def test_the_surf_s_losses_are_the_mean_of_the_wave_phases(landing_plan) -> None:
@@ -133,6 +153,7 @@ def test_the_surf_s_losses_are_the_mean_of_the_wave_phases(landing_plan) -> None
         ashore=np.array([True, True, False, False]),
         timed_out=np.array([False, False, True, True]),
         landed_m=np.array([[10.0, 40.0], [12.0, 41.0], [np.nan, np.nan], [np.nan, np.nan]]),
+        stuck=np.zeros(4),
     )
     surf_s, per_hit, timeout = exposure.surf_terms(drive, mission.hazards.surf.wave_period_s)
     assert surf_s == pytest.approx(drive.surf_s.mean())
@@ -143,6 +164,27 @@ def test_the_surf_s_losses_are_the_mean_of_the_wave_phases(landing_plan) -> None
     survive = np.exp(-drive.hazard)
     assert by_cause["wave_impact"] == pytest.approx(np.mean(1.0 - survive))
     assert by_cause["surf_timeout"] == pytest.approx(np.mean(survive * drive.timed_out))
+
+
+def test_getting_stuck_among_the_breakers_is_the_mean_of_the_wave_phases(landing_plan) -> None:
+    """The way in's chance of getting stuck in the surf (`WayIn.stuck`, made a hazard by
+    `exposure.way_in`) is the phases' mean of 1 - exp(-stuck), counted in the surf phase; wheels
+    in shallow water ashore (`Exposure.wet_m`) get stuck at the mode's per-metre rate with its
+    slip, afloat in deep water never."""
+    mission, plan = landing_plan
+    cm = plan.costmap
+    stuck = np.array([0.0, 0.01, 0.03, 0.2])
+    hazard = -math.log(np.exp(-stuck).mean())
+    losses = budget.robot_losses(mission, cm, budget.Exposure(0.0, 0.0, 0.0, surf_stuck_hazard=hazard))
+    assert losses["surf"]["immobilized"] == pytest.approx(np.mean(1.0 - np.exp(-stuck)))
+    assert "immobilized" not in losses["beach"]
+    imm = mission.hazards.immobilization
+    speeds = cm.speeds
+    slip = 1.0 - speeds.speed_mps[speeds.names.index("shallow_water")] / speeds.nominal_wheel_speed_mps
+    per_m = imm.per_km / 1000.0 * imm.mode_factors.get("shallow_water", 1.0) * (1.0 + (slip / 0.3) ** 2)
+    wading = budget.Exposure(0.0, 0.0, 0.0, wet_m={"shallow_water": 500.0, "deep_water": 500.0})
+    beach = budget.robot_losses(mission, cm, wading)["beach"]
+    assert beach["immobilized"] == pytest.approx(1.0 - math.exp(-per_m * 500.0))
 
 
 def test_a_timeout_takes_what_the_other_causes_leave() -> None:
