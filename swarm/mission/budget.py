@@ -793,21 +793,23 @@ def undone_band_kept(
     *,
     lanes: float,
     left: float,
-    undone: float,
     lost: float = 0.0,
     samples: int = 16,
 ) -> float:
     """Of what the strips of the lost searchers' undone track are expected to find, the share kept.
     A searcher drives a boustrophedon across its own band of `lanes` adjacent lanes, so a lost one
-    leaves the rest of its band; the survivors take over all but `undone` of that rest in pieces,
-    each piece on its own (`swarm.sim.policy` auctions them to whoever is nearest). `left`: the
-    mean share of its track a lost searcher leaves: all of it when lost before the track, a
-    uniform share when lost on it, mixed to give that mean. The bands beside are the neighbours'
-    searchers', each lost with probability `lost`, a lane of theirs then undone with probability
-    `left` x `undone`. A lane whose neighbours are driven keeps `undone_lane_kept`, the limit of
-    one-lane bands or little left undone; with undone neighbours less (an interior lane of a wide
-    undone band, nothing but what the lanes beyond reach). The neighbours out to
-    `BAND_REACH_LANES` to a side count."""
+    leaves the rest of its band. `left`: the mean share of its track a lost searcher leaves: all
+    of it when lost before the track, a uniform share when lost on it, mixed to give that mean.
+    The survivors take that rest over in pieces, nearest first (`swarm.sim.policy` auctions them),
+    so what nobody reaches in time lies together: where a lane of the rest is undone, the band's
+    other lanes of the rest are undone there too, and a neighbouring band's lane is whenever its
+    searcher was lost (probability `lost`) and had not driven it (`left`). (Each piece undone on
+    its own kept 95% of the strips of mine_clear's 1.1 m lanes laid for 24 searchers and no
+    reserves, where the runs' sensors covered 84% of the track left undone and found 96.2% of the
+    mines against the plan's 98.6%.) A lane whose neighbours are driven keeps `undone_lane_kept`,
+    the limit of one-lane bands with nothing lost beside them; with undone neighbours less (an
+    interior lane of a wide undone band, nothing but what the lanes beyond reach). The neighbours
+    out to `BAND_REACH_LANES` to a side count."""
     m = max(1, round(lanes))
     reach = min(_lanes_reached(model, width_m, spacing_m, curve) - 1, BAND_REACH_LANES)
     offsets = [o for o in range(-reach, reach + 1) if o != 0]
@@ -836,7 +838,7 @@ def undone_band_kept(
     totals = np.bincount(keys.ravel(), weights=(weight[:, None, None] * here).ravel(), minlength=1)
     if totals.sum() <= 0.0:
         return undone_lane_kept(model, width_m, spacing_m, curve)
-    chance = (0.0, undone, min(lost * left * undone, 1.0))  # undone, by state
+    chance = (0.0, 1.0, min(lost * left, 1.0))  # undone, by state
     kept = 0.0
     beside = _KeptBeside(model, width_m, spacing_m, curve, reach, 64, far_undone=chance[2])
     cache: dict[frozenset, float] = {}

@@ -1065,9 +1065,8 @@ def _budget(mission: Mission, plan: MissionPlan) -> dict:
         marking = budget.p_no_excess(left_over, left_over_sd)
         share = min(undone / need, 1.0) if need > 0 else 0.0
         # a strip whose track is left undone keeps what its neighbours' sensors reach into it: the
-        # driven ones', and fewer of them where the lost searcher's band is left undone around it
+        # driven ones', fewer where the lost searchers' bands are left undone around it
         lattice = "cookie_cutter" if model == "random" else model  # the sensor sees to a definite range
-        orphaned = orphaned_s.get(s.task, 0.0)
         lost_run = lost_run_s.get(s.task, 0.0)
         kept = budget.undone_band_kept(
             lattice,
@@ -1076,7 +1075,6 @@ def _budget(mission: Mission, plan: MissionPlan) -> dict:
             task.sensor.lateral_range,
             lanes=_lanes_per_searcher(s),
             left=lost_left_s.get(s.task, 0.0) / lost_run if lost_run > 0 else 1.0,
-            undone=min(undone / orphaned, 1.0) if orphaned > 0 else 0.0,
             lost=lost_run / need if need > 0 else 0.0,
         )
         mines = s.design["mines_expected"]

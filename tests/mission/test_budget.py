@@ -204,27 +204,26 @@ def test_an_undone_lane_keeps_what_the_inverse_cube_rates_of_the_others_give(spa
     )
 
 
-@pytest.mark.parametrize("undone", [0.0, 0.3, 1.0])
-def test_an_undone_band_keeps_what_its_driven_neighbours_reach(undone: float) -> None:
+@pytest.mark.parametrize("lost", [0.0, 0.4])
+def test_an_undone_band_keeps_what_its_driven_neighbours_reach(lost: float) -> None:
     """Cookie cutter, W = 2S: each track sees one lane over, so an undone lane's strip is seen
     half from each side. Alone it keeps everything; beside one undone lane, half (its driven side);
-    between two, nothing. A searcher lost before its track (`left` = 1) leaves its whole band: of
-    two lanes each has one band neighbour, undone with probability `undone`, so the band keeps
-    1 - undone / 2; of three lanes the edges keep that and the middle (1 - undone)^2 + undone
-    (1 - undone); a one-lane band keeps everything, less half for each neighbouring band's lane
-    undone (that searcher lost, with probability `lost`, and its lane not taken over)."""
+    between two, nothing. A searcher lost before its track (`left` = 1) leaves its whole band, and
+    where a lane of it is left undone the rest of the band is too (the pieces nobody reaches lie
+    together): of two lanes each keeps the half its other side gives, of three the edges keep
+    that and the middle nothing; the bands beside are undone where their searcher was lost
+    (`lost`) and had not driven them yet (`left`), a lane on a band's edge then losing its other
+    half: two-lane bands keep (1 - q) / 2, three-lane ones 2 (1 - q) / 2 / 3, a one-lane band
+    (1 - q)^2 + q (1 - q), with q = `lost` x `left`."""
     s = 2.0
+    q = lost
 
-    def kept(lanes: int, lost: float = 0.0) -> float:
-        return budget.undone_band_kept(
-            "cookie_cutter", 2 * s, s, lanes=lanes, left=1.0, undone=undone, lost=lost
-        )
+    def kept(lanes: int) -> float:
+        return budget.undone_band_kept("cookie_cutter", 2 * s, s, lanes=lanes, left=1.0, lost=lost)
 
-    assert kept(2) == pytest.approx(1.0 - undone / 2.0, abs=0.01)
-    middle = (1.0 - undone) ** 2 + undone * (1.0 - undone)
-    assert kept(3) == pytest.approx((2.0 * (1.0 - undone / 2.0) + middle) / 3.0, abs=0.01)
-    q = 0.4 * undone  # P(a neighbouring band's lane is undone): its searcher lost, the lane not taken
-    assert kept(1, lost=0.4) == pytest.approx((1.0 - q) ** 2 + q * (1.0 - q), abs=0.01)
+    assert kept(2) == pytest.approx((1.0 - q) / 2.0, abs=0.01)
+    assert kept(3) == pytest.approx(2.0 * (1.0 - q) / 2.0 / 3.0, abs=0.01)
+    assert kept(1) == pytest.approx((1.0 - q) ** 2 + q * (1.0 - q), abs=0.01)
 
 
 @pytest.mark.parametrize(
@@ -235,17 +234,16 @@ def test_an_undone_band_keeps_what_its_driven_neighbours_reach(undone: float) ->
     ],
 )
 def test_an_undone_band_with_nothing_else_undone_keeps_what_one_lane_keeps(model, w, s, curve) -> None:
-    """With its neighbours always driven (one-lane bands, or every other piece taken over and no
-    neighbouring searcher lost) an undone lane keeps `undone_lane_kept`; with more of its band
-    undone, or more lost around it, less."""
+    """With its neighbours always driven (one-lane bands and no neighbouring searcher lost) an
+    undone lane keeps `undone_lane_kept`; with more of its band undone around it (wider bands, a
+    searcher lost earlier in its band), or more lost beside it, less."""
     alone = budget.undone_lane_kept(model, w, s, curve)
 
     def kept(**kw) -> float:
-        return budget.undone_band_kept(model, w, s, curve, **{"lanes": 4.0, "left": 0.6, "undone": 0.5, **kw})
+        return budget.undone_band_kept(model, w, s, curve, **{"lanes": 4.0, "left": 0.6, **kw})
 
     assert kept(lanes=1.0, lost=0.0) == pytest.approx(alone, abs=1e-3)  # a wider lattice
-    assert kept(undone=0.0) == pytest.approx(alone, abs=1e-3)
-    assert kept(undone=0.8) < kept(undone=0.5) < kept(undone=0.2) < alone
+    assert kept(lanes=6.0) < kept(lanes=3.0) < kept(lanes=1.0, lost=0.0) <= alone + 1e-3
     assert kept(lost=0.5) < kept(lost=0.0)
     assert kept(left=0.9) < kept(left=0.3)  # lost earlier, more of the band is left
 
