@@ -793,6 +793,7 @@ def undone_band_kept(
     *,
     lanes: float,
     left: float,
+    undone: float,
     lost: float = 0.0,
     samples: int = 16,
 ) -> float:
@@ -801,12 +802,13 @@ def undone_band_kept(
     leaves the rest of its band. `left`: the mean share of its track a lost searcher leaves: all
     of it when lost before the track, a uniform share when lost on it, mixed to give that mean.
     The survivors take that rest over in pieces, nearest first (`swarm.sim.policy` auctions them),
-    so what nobody reaches in time lies together: where a lane of the rest is undone, the band's
-    other lanes of the rest are undone there too, and a neighbouring band's lane is whenever its
-    searcher was lost (probability `lost`) and had not driven it (`left`). (Each piece undone on
-    its own kept 95% of the strips of mine_clear's 1.1 m lanes laid for 24 searchers and no
-    reserves, where the runs' sensors covered 84% of the track left undone and found 96.2% of the
-    mines against the plan's 98.6%.) A lane whose neighbours are driven keeps `undone_lane_kept`,
+    and leave `undone` of it; what nobody reaches in time lies together, so where a lane of the
+    rest is undone, the band's other lanes of the rest are undone there too. A neighbouring band's
+    lane is undone when its searcher was lost (probability `lost`), had not driven it (`left`)
+    and nobody took it over (`undone`), a draw of its own. (Each lane of the rest undone on its own
+    kept 95% of the strips of mine_clear's 1.1 m lanes laid for 24 searchers with no reserves,
+    where the runs' sensors covered 84% of the track left undone, and 86% at 18 searchers, 1.46 m
+    apart, where they covered 72%.) A lane whose neighbours are driven keeps `undone_lane_kept`,
     the limit of one-lane bands with nothing lost beside them; with undone neighbours less (an
     interior lane of a wide undone band, nothing but what the lanes beyond reach). The neighbours
     out to `BAND_REACH_LANES` to a side count."""
@@ -838,7 +840,7 @@ def undone_band_kept(
     totals = np.bincount(keys.ravel(), weights=(weight[:, None, None] * here).ravel(), minlength=1)
     if totals.sum() <= 0.0:
         return undone_lane_kept(model, width_m, spacing_m, curve)
-    chance = (0.0, 1.0, min(lost * left, 1.0))  # undone, by state
+    chance = (0.0, 1.0, min(lost * left * undone, 1.0))  # undone, by state
     kept = 0.0
     beside = _KeptBeside(model, width_m, spacing_m, curve, reach, 64, far_undone=chance[2])
     cache: dict[frozenset, float] = {}

@@ -1067,6 +1067,7 @@ def _budget(mission: Mission, plan: MissionPlan) -> dict:
         # a strip whose track is left undone keeps what its neighbours' sensors reach into it: the
         # driven ones', fewer where the lost searchers' bands are left undone around it
         lattice = "cookie_cutter" if model == "random" else model  # the sensor sees to a definite range
+        orphaned = orphaned_s.get(s.task, 0.0)
         lost_run = lost_run_s.get(s.task, 0.0)
         kept = budget.undone_band_kept(
             lattice,
@@ -1075,6 +1076,7 @@ def _budget(mission: Mission, plan: MissionPlan) -> dict:
             task.sensor.lateral_range,
             lanes=_lanes_per_searcher(s),
             left=lost_left_s.get(s.task, 0.0) / lost_run if lost_run > 0 else 1.0,
+            undone=min(undone / orphaned, 1.0) if orphaned > 0 else 0.0,
             lost=lost_run / need if need > 0 else 0.0,
         )
         mines = s.design["mines_expected"]

@@ -138,10 +138,10 @@ def test_an_undone_band_among_lost_bands_keeps_nothing(model: str, w: float, s: 
     """Every searcher lost before its track and none of it taken over: no lane is driven, so no
     strip keeps anything, however far the sensor reaches (the inverse cube's lanes beyond
     `BAND_REACH_LANES` used to count as driven: 10% kept). With nothing lost around it, as before."""
-    gone = budget.undone_band_kept(model, w, s, lanes=3.0, left=1.0, lost=1.0)
+    gone = budget.undone_band_kept(model, w, s, lanes=3.0, left=1.0, undone=1.0, lost=1.0)
     assert gone == pytest.approx(0.0, abs=1e-9)
-    some = budget.undone_band_kept(model, w, s, lanes=3.0, left=1.0, lost=0.5)
-    none = budget.undone_band_kept(model, w, s, lanes=3.0, left=1.0, lost=0.0)
+    some = budget.undone_band_kept(model, w, s, lanes=3.0, left=1.0, undone=1.0, lost=0.5)
+    none = budget.undone_band_kept(model, w, s, lanes=3.0, left=1.0, undone=1.0, lost=0.0)
     assert gone < some < none
 
 

@@ -204,22 +204,24 @@ def test_an_undone_lane_keeps_what_the_inverse_cube_rates_of_the_others_give(spa
     )
 
 
-@pytest.mark.parametrize("lost", [0.0, 0.4])
-def test_an_undone_band_keeps_what_its_driven_neighbours_reach(lost: float) -> None:
+@pytest.mark.parametrize(("lost", "undone"), [(0.0, 0.5), (0.4, 0.5), (0.4, 1.0)])
+def test_an_undone_band_keeps_what_its_driven_neighbours_reach(lost: float, undone: float) -> None:
     """Cookie cutter, W = 2S: each track sees one lane over, so an undone lane's strip is seen
     half from each side. Alone it keeps everything; beside one undone lane, half (its driven side);
     between two, nothing. A searcher lost before its track (`left` = 1) leaves its whole band, and
     where a lane of it is left undone the rest of the band is too (the pieces nobody reaches lie
     together): of two lanes each keeps the half its other side gives, of three the edges keep
-    that and the middle nothing; the bands beside are undone where their searcher was lost
-    (`lost`) and had not driven them yet (`left`), a lane on a band's edge then losing its other
-    half: two-lane bands keep (1 - q) / 2, three-lane ones 2 (1 - q) / 2 / 3, a one-lane band
-    (1 - q)^2 + q (1 - q), with q = `lost` x `left`."""
+    that and the middle nothing; a lane of the bands beside is undone where its searcher was lost
+    (`lost`), had not driven it (`left`) and nobody took it over (`undone`), a lane on a band's
+    edge then losing its other half: two-lane bands keep (1 - q) / 2, three-lane ones
+    2 (1 - q) / 2 / 3, a one-lane band (1 - q)^2 + q (1 - q), with q = `lost` x `left` x `undone`."""
     s = 2.0
-    q = lost
+    q = lost * undone
 
     def kept(lanes: int) -> float:
-        return budget.undone_band_kept("cookie_cutter", 2 * s, s, lanes=lanes, left=1.0, lost=lost)
+        return budget.undone_band_kept(
+            "cookie_cutter", 2 * s, s, lanes=lanes, left=1.0, undone=undone, lost=lost
+        )
 
     assert kept(2) == pytest.approx((1.0 - q) / 2.0, abs=0.01)
     assert kept(3) == pytest.approx(2.0 * (1.0 - q) / 2.0 / 3.0, abs=0.01)
@@ -240,10 +242,12 @@ def test_an_undone_band_with_nothing_else_undone_keeps_what_one_lane_keeps(model
     alone = budget.undone_lane_kept(model, w, s, curve)
 
     def kept(**kw) -> float:
-        return budget.undone_band_kept(model, w, s, curve, **{"lanes": 4.0, "left": 0.6, **kw})
+        return budget.undone_band_kept(model, w, s, curve, **{"lanes": 4.0, "left": 0.6, "undone": 0.5, **kw})
 
     assert kept(lanes=1.0, lost=0.0) == pytest.approx(alone, abs=1e-3)  # a wider lattice
+    assert kept(lanes=1.0, lost=0.5, undone=0.0) == pytest.approx(alone, abs=1e-3)
     assert kept(lanes=6.0) < kept(lanes=3.0) < kept(lanes=1.0, lost=0.0) <= alone + 1e-3
+    assert kept(lost=0.5, undone=0.8) < kept(lost=0.5, undone=0.2)
     assert kept(lost=0.5) < kept(lost=0.0)
     assert kept(left=0.9) < kept(left=0.3)  # lost earlier, more of the band is left
 
