@@ -305,10 +305,12 @@ def robot_losses(mission: Mission, cm: CostMap, exposure: Exposure) -> dict[str,
         rock += hidden_per_m * metres
         if cls == "rock":
             rock += hz.rocks.damage_per_km / 1000.0 * metres
-    for by_class in (exposure.driven_m, exposure.wet_m):
-        for cls, metres in by_class.items():
-            per_m = immobilization_per_m(mission, (cls,))[0]
-            stuck += per_m * float(slip_factor(np.float64(slip.get(cls, 0.0)))) * metres
+    wheeled = [*exposure.driven_m.items(), *exposure.wet_m.items()]  # dry ground and the swash
+    if wheeled:
+        classes, metres = zip(*wheeled, strict=True)
+        slips = np.array([slip.get(c, 0.0) for c in classes])
+        per_m = immobilization_per_m(mission, classes) * slip_factor(slips)
+        stuck = sum(float(r) * m for r, m in zip(per_m, metres, strict=True))
     out["beach"]["immobilized"] = -math.expm1(-stuck)
     if exposure.surf_stuck_hazard > 0:
         out["surf"]["immobilized"] = -math.expm1(-exposure.surf_stuck_hazard)
