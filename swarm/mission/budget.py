@@ -270,18 +270,25 @@ def slip_factor(slip: np.ndarray) -> np.ndarray:
     return 1.0 + s * s
 
 
+def timed_losses(mission: Mission, t_s: float) -> dict[str, float]:
+    """The chance of each cause that strikes by the clock alone (random failure, a radio cut off
+    for good) over `t_s` seconds, whatever the robot does."""
+    hz = mission.hazards
+    out = {"failure": -math.expm1(-t_s / (hz.attrition.mtbf_h * 3600.0))}
+    dropout = hz.comms.dropout_per_h / 3600.0
+    if dropout > 0:
+        out["cut_off"] = -math.expm1(-dropout * t_s)
+    return out
+
+
 def robot_losses(mission: Mission, cm: CostMap, exposure: Exposure) -> dict[str, dict[str, float]]:
     """Probability the robot is lost in each phase, by cause (module docstring)."""
     out: dict[str, dict[str, float]] = {p: {} for p in PHASE_NAMES}
     if not hazards_enabled(mission):
         return out
     hz = mission.hazards
-    mtbf_s = hz.attrition.mtbf_h * 3600.0
-    dropout = hz.comms.dropout_per_h / 3600.0
     for phase, t in (("sea", exposure.sea_s), ("surf", exposure.surf_s), ("beach", exposure.beach_s)):
-        out[phase]["failure"] = -math.expm1(-t / mtbf_s)
-        if dropout > 0:
-            out[phase]["cut_off"] = -math.expm1(-dropout * t)
+        out[phase].update(timed_losses(mission, t))
     hits = exposure.surf_s / hz.surf.wave_period_s
     per_hit = exposure.breaker_hazard
     if per_hit is None:

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -303,7 +304,11 @@ def ways_in(
 
 
 def off_plan_driving(
-    mission: Mission, cm: CostMap, plan: MissionPlan, ways: list[WayIn]
+    mission: Mission,
+    cm: CostMap,
+    plan: MissionPlan,
+    ways: list[WayIn],
+    done: Mapping[str, tuple[float, float]] | None = None,
 ) -> tuple[list, dict[str, Trips]]:
     """What the scripted policy has robots drive beyond their planned routes, for each robot: the
     metres on each class and in the mine area; and for each search, the metres of its trips
@@ -315,7 +320,11 @@ def off_plan_driving(
     come due late, when the robots are spread over the tracks: a mark's trip is the mean distance
     between two points of the tracks (mine_clear, 48 runs: 251 m a mark, against 296 m from this
     and the 60 m of the standoff the plan used to count). The work goes to the task's reserves,
-    else to the mission's spares, else to its searchers, in equal shares."""
+    else to the mission's spares, else to its searchers, in equal shares.
+
+    `done[task]`: the share of the lost-track work the takers get done in time and the chance the
+    marks are made (the budget's own answer, from a first pass without it): the takers drive only
+    that. The returned trips are the whole work's, which is what its time is weighed from."""
     out: list = [({}, 0.0) for _ in ways]
     trips_by_task: dict[str, Trips] = {}
     for s in plan.search:
@@ -326,6 +335,7 @@ def off_plan_driving(
         takers = takers or [k for k, rp in enumerate(plan.robots) if rp.role == "spare"] or searchers
         if not searchers or not takers:
             continue
+        share, marking = (done or {}).get(s.task, (1.0, 1.0))
         track_total = sum(sum(ways[k].track_m.values()) for k in searchers)
         if track_total <= 0:
             continue
@@ -342,14 +352,15 @@ def off_plan_driving(
             losses = losses_of[k]
             left = track_left(mission, cm, ways[k], losses)
             for c, v in ways[k].track_m.items():
-                metres[c] = metres.get(c, 0.0) + left * v
-            inside += left * ways[k].track_inside_m
+                metres[c] = metres.get(c, 0.0) + share * left * v
+            inside += share * left * ways[k].track_inside_m
             # a trip to each piece of what is left: ceil(left / piece), about half a piece more
             left_m = left * sum(ways[k].track_m.values())
             pieces = left_m / budget.TAKEOVER_PIECE_M + 0.5 * budget.lost_probability(losses)
             trips += pieces * reach
-        inside += trips
+        inside += share * trips
         to_pieces = trips
+        driven = share * trips  # of the trips, those the takers make
         if task.mark:
             lasting = [1.0 - budget.lost_probability(losses_of[k]) for k in team]
             random_count = budget.mine_count_is_random(mission)
@@ -358,15 +369,16 @@ def off_plan_driving(
             )
             to_mark = marks * max(mean_distance_apart([plan.robots[k].track_m for k in searchers]), reach)
             trips += to_mark
+            driven += marking * to_mark
             # over searched ground, clear of the mines found: only those the search missed are left
-            inside += to_mark * (1.0 - s.expected_detection)
+            inside += marking * to_mark * (1.0 - s.expected_detection)
         # only the takers ashore drive to the pieces (each taker's share of trips is what it drives
         # while there; the marks count only the robots that last already)
         ashore = [budget.time_ashore(budget.robot_losses(mission, cm, ways[k].exposure)) for k in takers]
         trips_by_task[s.task] = Trips(to_pieces * float(np.mean(ashore)), trips - to_pieces)
         for k in searchers:
             for c, v in ways[k].track_m.items():
-                metres[c] = metres.get(c, 0.0) + trips * v / track_total
+                metres[c] = metres.get(c, 0.0) + driven * v / track_total
         share = {c: v / len(takers) for c, v in metres.items()}
         for k in takers:
             out[k] = (add_metres(out[k][0], share), out[k][1] + inside / len(takers))

@@ -809,6 +809,20 @@ class Mission(_Model):
     def tasks_of(self, task_type: str) -> list:
         return [t for t in self.tasks if t.type == task_type]
 
+    @property
+    def judged_by(self) -> list[str]:
+        """The success criteria a run is judged by (`swarm.sim.criteria`): each applies only
+        when the mission has its task, robots recovered only when some are asked for."""
+        applies = {
+            "landing": any(t.zones for t in self.tasks_of("landing")),
+            "detection": bool(self.tasks_of("search")),
+            "relay": bool(self.tasks_of("relay")),
+            "surveillance": bool(self.tasks_of("surveillance")),
+            "beacon": bool(self.tasks_of("beacon")),
+            "recovered": self.success.min_robots_recovered > 0,
+        }
+        return [c for c, on in applies.items() if on]
+
     # what `load_mission` resolved and loaded (paths, map, terrain library, robot, planner profile)
     def resolved(self, what: str) -> Any:
         """One of 'map_path', 'planner_path', 'robot_path', 'terrain_path', 'beach_map',

@@ -555,6 +555,13 @@ def evaluation_table(
             f"{ev['wilson_low']:.3f} to {ev['wilson_high']:.3f}; target {ev['target']:g}",
         ],
     ]
+    chance = ev.get("planned_success")
+    if chance is not None:  # against the Wilson interval, as a mean against its t interval
+        wilson = (ev["wilson_low"], ev["wilson_high"])
+        text = f"{ev['success_rate']:.3f}" + against_plan(
+            chance, wilson, ".3f", ev["confidence"], more_is_better=True
+        )
+        rows.append(["P(success): simulated against planned", text])
     det = ev.get("detection")
     if det:
         rows.append(

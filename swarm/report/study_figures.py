@@ -172,8 +172,8 @@ def _x_axis(ax, key: str | None, positions: dict, ticks: list[str] | None) -> No
 
 def success_png(summary: dict) -> bytes | None:
     """Success probability against the swept key with Wilson interval error bars, one line per value
-    of the other swept keys, the target as a horizontal line and the required value marked; None
-    without points."""
+    of the other swept keys, the plan's chance of success as a hollow marker where it gives one,
+    the target as a horizontal line and the required value marked; None without points."""
     points = summary.get("points") or []
     if not points:
         return None
@@ -202,6 +202,12 @@ def success_png(summary: dict) -> bytes | None:
             label=label or "P(success)",
             zorder=5,
         )
+        chances = [(xi, p.get("planned_success")) for xi, p in zip(x, pts, strict=True)]
+        planned = [(xi, c) for xi, c in chances if c is not None]
+        if planned:
+            px, py = zip(*planned, strict=True)
+            ax.plot(px, py, ls="none", marker=marker, ms=9, mfc="none", mec=OKABE_ITO["black"], mew=1.3,
+                    label="plan" + (f": {label}" if label else ""), zorder=6)  # fmt: skip
     target = summary.get("target")
     if target is not None:
         ax.axhline(target, color=OKABE_ITO["black"], ls="--", lw=1.0, label=f"target {target:g}", zorder=3)
@@ -222,7 +228,9 @@ def success_png(summary: dict) -> bytes | None:
     confidence = summary.get("confidence", 0.95)
     runs = summary.get("runs_per_point")
     per = f", {runs} runs per point" if runs else ""
-    ax.set_title(f"success probability with {confidence:.0%} Wilson intervals{per}", fontsize=9)
+    planned = any(p.get("planned_success") is not None for p in points)
+    hollow = ", the plan's chance hollow" if planned else ""
+    ax.set_title(f"success probability with {confidence:.0%} Wilson intervals{per}{hollow}", fontsize=9)
     ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
     return png_bytes(fig)
 

@@ -78,9 +78,9 @@ def answer(summary: dict) -> str:
     if required.get("value") is not None and target is not None:
         what = required_value_text(required.get("key", "?"), required["value"])
         goal = f"P(success) >= {target:g} at {percent(confidence)} confidence"
-        return f"{mission} needs {what} for {goal}{where}"
+        return f"{mission} needs {what} for {goal}{where}{_plan_says(required, target)}"
     if required.get("note"):
-        return f"{required['note']}{where}"
+        return f"{required['note']}{where}{_plan_says(required, target)}"
     points = summary.get("points") or []
     if len(points) == 1:
         p = points[0]
@@ -92,6 +92,22 @@ def answer(summary: dict) -> str:
             f"{_against_target(p, target, confidence)}"
         )
     return f"{mission}: no required value was computed for this study"
+
+
+def _plan_says(required: dict, target: float | None) -> str:
+    """The plan's own answer beside the runs' ('; the plan expects P(success) >= 0.95 from 18
+    robots'), empty where the plans give no chance of success."""
+    planned = required.get("planned")
+    if not planned or target is None:
+        return ""
+    key = required.get("key", "?")
+    if planned.get("value") is None:
+        best_value, best = max(planned["chances"], key=lambda vc: vc[1])
+        return (
+            f"; no swept plan expects P(success) >= {target:g} (the best, "
+            f"{required_value_text(key, best_value)}, expects {best:.3f})"
+        )
+    return f"; the plan expects P(success) >= {target:g} from {required_value_text(key, planned['value'])}"
 
 
 def _against_target(point: dict, target: float | None, confidence: float) -> str:
@@ -176,6 +192,12 @@ def _plan_cell(planned: object, interval: object, spec: str, *, more_is_better: 
     return f"{text} ({stats.agreement(_number(planned), bounds, more_is_better=more_is_better)})"
 
 
+def _wilson(point: dict) -> list | None:
+    """A point's Wilson interval of its success rate, as `_plan_cell` takes an interval."""
+    low, high = _number(point.get("wilson_low")), _number(point.get("wilson_high"))
+    return None if low is None or high is None else [low, high]
+
+
 def points_note(summary: dict) -> str:
     """What the point table's ± and the plan's verdicts mean."""
     confidence = summary.get("confidence", 0.95)
@@ -183,7 +205,8 @@ def points_note(summary: dict) -> str:
         f"A mean's ± is the half-width of its {percent(confidence)} t interval over the point's runs. "
         "The plan's expectation agrees when it lies inside that interval; outside it, it is optimistic "
         "when it promises fewer robots lost or more mines found than the runs give, conservative when "
-        f"fewer found or more lost. A plan that holds misses its interval by chance in about "
+        f"fewer found or more lost; its P(success) against the runs' Wilson interval alike. A plan "
+        f"that holds misses its interval by chance in about "
         f"{percent(1 - confidence)} of points: more runs tell chance from a real miss."
     )
 
@@ -210,6 +233,7 @@ def study_rows(summary: dict) -> list[list[str]]:
     ]
     confidence = summary.get("confidence", 0.95)
     target = _number(summary.get("target"))
+    chances = any(_number(p.get("planned_success")) is not None for p in summary.get("points") or [])
     head = keys or ["point"]
     # a point that could not run says why, in a last column there only when one could not
     why = any(p.get("infeasible") for p in summary.get("points") or [])
@@ -220,6 +244,7 @@ def study_rows(summary: dict) -> list[list[str]]:
             "successes",
             "P(success)",
             f"{percent(confidence)} Wilson interval",
+            *(["plan's P(success)"] if chances else []),
             "lower bound ≥ target",
             "median time to success (s)",
             "mean lost per run",
@@ -245,6 +270,7 @@ def study_rows(summary: dict) -> list[list[str]]:
                 str(p.get("successes", MISSING)),
                 _fmt(p.get("success_rate"), ".3f"),
                 f"{_fmt(p.get('wilson_low'), '.3f')} to {_fmt(p.get('wilson_high'), '.3f')}",
+                *([_plan_cell(p.get("planned_success"), _wilson(p), ".3f")] if chances else []),
                 meets,
                 _seconds(median),
                 _mean_cell(p.get("lost_mean"), p.get("lost_interval"), ".2f"),
@@ -331,8 +357,8 @@ def _figures(
         Figure(
             "Success probability",
             lambda: figs.success_png(summary),
-            alt="Success probability against the swept parameter, with Wilson interval bars, the target "
-            "and the required value",
+            alt="Success probability against the swept parameter, with Wilson interval bars, the plan's "
+            "chance of success where it gives one, the target and the required value",
             absent="No parameter points.",
         ),
         Figure(

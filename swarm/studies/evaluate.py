@@ -104,6 +104,8 @@ def evaluate_plan(
         "success_rate": point["success_rate"],
         "wilson_low": point["wilson_low"],
         "wilson_high": point["wilson_high"],
+        # the plan's chance of success (`success_chance`; None where it gives none)
+        "planned_success": point.get("planned_success"),
         "target": target,
         "confidence": confidence,
         "detection": stats.distribution(np.asarray(detection, dtype=np.float64)) if detection else None,

@@ -211,6 +211,7 @@ def summarize(spec: StudySpec, table: pa.Table) -> dict:
     planned = cols.get("planned_lost") or [None] * len(point_of)  # absent from older tables
     found = cols.get("value_detection") or [None] * len(point_of)
     planned_found = cols.get("planned_detection") or [None] * len(point_of)
+    planned_success = cols.get("planned_success") or [None] * len(point_of)
     ends = {c: cols.get(c) or [None] * len(point_of) for c in ("mines_cleared", "recovered")}
     out_points = []
     for p, params in enumerate(spec.points()):
@@ -231,6 +232,8 @@ def summarize(spec: StudySpec, table: pa.Table) -> dict:
                 "success_rate": None if why else rate,
                 "wilson_low": None if why else low,
                 "wilson_high": None if why else high,
+                # the plan's chance of success (`success_chance`), to hold against the interval
+                "planned_success": _first_of(planned_success, mine),
                 "completed_s": stats.distribution(completed[mine]),
                 "losses_by_cause": by_cause,
                 "losses_by_phase": by_phase,
@@ -238,13 +241,11 @@ def summarize(spec: StudySpec, table: pa.Table) -> dict:
                 "lost_interval": _count_interval(
                     [len(losses[i]) for i in mine], spec.confidence, max((robots[i] for i in mine), default=0)
                 ),
-                "planned_lost": next((planned[i] for i in mine if planned[i] is not None), None),
+                "planned_lost": _first_of(planned, mine),
                 # the mines found a run against the plan's expectation after its losses
                 "detection_mean": _mean_of([found[i] for i in mine]),
                 "detection_interval": _interval_of([found[i] for i in mine], spec.confidence, (0.0, 1.0)),
-                "planned_detection": next(
-                    (planned_found[i] for i in mine if planned_found[i] is not None), None
-                ),
+                "planned_detection": _first_of(planned_found, mine),
                 # how the mission ended besides its losses: mines the clearance set off, robots
                 # picked up at sea (None from tables written before they were counted)
                 **{f"{c}_mean": _mean_of([v[i] for i in mine]) for c, v in ends.items()},
@@ -272,6 +273,12 @@ def summarize(spec: StudySpec, table: pa.Table) -> dict:
         "losses_by_phase": by_phase,
         "version": getattr(swarm, "__version__", "unknown"),
     }
+
+
+def _first_of(values: list, rows: np.ndarray) -> float | None:
+    """The first of `values` at `rows` that is there: a point's plan's number, the same in each of
+    its rows (None in rows of tables written before the column existed)."""
+    return next((values[i] for i in rows if values[i] is not None), None)
 
 
 def _mean_of(values: list) -> float | None:
@@ -343,4 +350,22 @@ def _required(spec: StudySpec, pts: list[dict]) -> dict | None:
         "confidence": spec.confidence,
         "held": fixed,
         "note": note,
+        "planned": _planned_required(key, chosen, spec.target, numeric[0].is_integer),
     }
+
+
+def _planned_required(key: str, chosen: list[dict], target: float, integer: bool) -> dict | None:
+    """The plan's own answer to the study's question: the smallest swept value whose plan gives
+    P(success) >= target (`success_chance`; None where none does), with each point's chance;
+    None when no point's plan gives one."""
+    chances = sorted(
+        (float(pt["params"][key]), pt["planned_success"])
+        for pt in chosen
+        if pt.get("planned_success") is not None
+    )
+    if not chances:
+        return None
+    value = next((v for v, p in chances if p >= target), None)
+    if value is not None and integer:
+        value = int(value)
+    return {"value": value, "chances": [[int(v) if integer else v, p] for v, p in chances]}

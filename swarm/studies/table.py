@@ -20,6 +20,9 @@ Columns, in order:
 - ``planned_detection`` (float64): the share of the mines the point's plan expects found after its
   losses (`MissionPlan.expected_detection`), to set beside ``value_detection``; null without a
   search, and in tables written before it existed.
+- ``planned_success`` (float64): the point's plan's chance that a run meets every criterion
+  (`swarm.mission.plan.success_chance`), to set beside ``success``; null where the plan gives no
+  chance for some criterion a run is judged by, and in tables written before it existed.
 - ``mines``, ``mines_detected``, ``mines_cleared`` (int32): mines laid, found by a sensor, and set
   off by the synchronized clearance (each by the robot marking it); null in tables written before
   they existed.
@@ -83,6 +86,7 @@ def schema(sweep_types: Sequence[tuple[str, pa.DataType]]) -> pa.Schema:
     fields += [pa.field("lost", pa.int32())]
     fields += [pa.field(f"lost_{c}", pa.int32()) for c in CAUSES]
     fields += [pa.field("planned_lost", pa.float64()), pa.field("planned_detection", pa.float64())]
+    fields += [pa.field("planned_success", pa.float64())]
     fields += [pa.field(c, pa.int32()) for c in OUTCOME_COUNTS]
     fields += [
         pa.field("losses", pa.list_(LOSS)),

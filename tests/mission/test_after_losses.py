@@ -265,3 +265,79 @@ def test_the_survivors_work_until_the_retreat_and_again_after_the_blast() -> Non
     assert budget.takeover_s(mission, task, 1500.0) == pytest.approx(end - 1500.0 + 600.0)
     assert budget.takeover_s(mission, task, 7100.0) == pytest.approx(600.0)  # at work after the retreat
     assert budget.takeover_s(mission, task, 7500.0) == pytest.approx(300.0)
+
+
+def _search_only(mtbf_h: float, **success):
+    """`_mission` without its relay: a run is judged by its mines found alone (unless `success`
+    asks for robots back)."""
+    raw = _mission(mtbf_h).model_dump(mode="json", exclude_none=True)
+    raw = _eight_by_hand("search_only", 60, 120) | {
+        "tasks": [t for t in raw["tasks"] if t["type"] == "search"],
+        "success": {"min_detection_fraction": 0.3, **success},
+        "hazards": raw["hazards"],
+    }
+    return mission_from_dict(raw, REPO / "missions" / "search_only.yaml")
+
+
+@pytest.mark.parametrize("mtbf_h", [1000.0, 1e-4])
+def test_a_plan_s_chance_of_success_is_its_search_s_after_losses(mtbf_h: float) -> None:
+    """A run judged by its mines found alone succeeds with the plan's chance that its search meets
+    the criterion after its losses: 3 mines, at least ceil(0.3 x 3) = 1 found, each with the
+    detection after losses, binomially; none when every robot is lost on the swim. A run also
+    judged by a criterion the plan gives no chance for (robots back, a relay) has none."""
+    from swarm.mission.plan import success_chance
+
+    mission = _search_only(mtbf_h)
+    assert mission.judged_by == ["detection"]
+    plan = plan_mission(mission, seed=2, workers=1)
+    (search,) = plan.budget["search"].values()
+    after = search["expected_detection_after_losses"]
+    assert success_chance(mission, plan) == pytest.approx(binom.sf(0, 3, after), rel=1e-9)
+    if mtbf_h < 1:
+        assert success_chance(mission, plan) < 1e-6
+    else:
+        assert 0.5 < success_chance(mission, plan) < 1.0
+    back = _search_only(mtbf_h, min_robots_recovered=1)
+    assert back.judged_by == ["detection", "recovered"]
+    assert success_chance(back, plan) is None
+
+
+@pytest.mark.parametrize("name", ["mine_clear", "full_conops", "landing", "recon", "relay"])
+def test_the_criteria_a_run_is_judged_by_are_the_simulator_s(name: str) -> None:
+    """`Mission.judged_by` names the criteria the simulator's score counts (`MissionScore`), for
+    every shipped mission and the relay-and-search mission above."""
+    from swarm.mission import load_mission
+    from swarm.sim.criteria import MissionScore
+
+    for mission in (load_mission(REPO / "missions" / f"{name}.yaml"), _mission(10.0, **CRITERIA)):
+        relays = mission.tasks_of("relay")
+        score = MissionScore(mission, relays[0].redundancy if relays else None, n_mines=3)
+        assert mission.judged_by == list(score.values())
+
+
+def test_a_marker_expended_at_the_blast_is_not_lost_by_the_clock_after_it() -> None:
+    """mine_clear's markers leave the mission at the blast, 600 s before beach operations end (24
+    robots: 13.3 expended a run in 100 runs), and the budget counted random failures for every robot
+    to the end. It now takes off as many as halfway between the fewest and most markers it
+    expects, each with the chance of failing in those 600 s at the mission's MTBF (10 h): 1 -
+    exp(-600 / 36000) = 0.01653; nothing else moves."""
+    from swarm.mission import load_mission
+    from swarm.mission import plan as planning
+
+    mission = load_mission(REPO / "missions" / "mine_clear.yaml")
+    after_s = mission.beach_end_s - mission.tasks[0].clearance.at_s
+    assert after_s == 600.0
+    counted = planning.plan_mission(mission, seed=mission.seed, workers=1).budget
+    timed = budget.timed_losses
+
+    def nothing_after_the_blast(m, t_s: float) -> dict[str, float]:
+        return {c: 0.0 for c in timed(m, t_s)} if t_s == after_s else timed(m, t_s)
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(budget, "timed_losses", nothing_after_the_blast)
+        uncounted = planning.plan_mission(mission, seed=mission.seed, workers=1).budget
+    markers = sum(counted["expected_expended"]) / 2.0
+    assert counted["expected_expended"] == uncounted["expected_expended"] and markers > 5.0
+    failed = [b["expected_losses"]["beach"]["failure"] for b in (counted, uncounted)]
+    assert failed[1] - failed[0] == pytest.approx(markers * -math.expm1(-600.0 / 36000.0), rel=1e-9)
+    assert uncounted["expected_lost"] - counted["expected_lost"] == pytest.approx(failed[1] - failed[0])

@@ -220,3 +220,17 @@ def test_runs_too_few_to_show_the_target_are_not_a_plan_that_falls_short() -> No
     assert _verdict([plan_check, sim(7, 8)])["status"] == "not met"
     failing = {**plan_check, "value": 0.2, "met": False}
     assert _verdict([failing, sim(8, 8)])["text"].startswith("PLAN FALLS SHORT: ")
+
+
+def test_the_table_holds_the_plan_s_chance_of_success_against_the_runs_wilson_interval() -> None:
+    """4 successes in 4 runs (Wilson 0.51 to 1.0): a plan that gives 0.6 agrees, one that gives
+    0.4 is conservative; a plan that gives no chance of success (`success_chance` None) adds no row."""
+    rows = dict(map(tuple, evaluation_table({**_evaluation(), "planned_success": 0.6})))
+    assert (
+        rows["P(success): simulated against planned"]
+        == "1.000 (95% interval 0.510 to 1.000; plan 0.600: agrees)"
+    )
+    rows = dict(map(tuple, evaluation_table({**_evaluation(), "planned_success": 0.4})))
+    assert rows["P(success): simulated against planned"].endswith("plan 0.400: conservative)")
+    for ev in ({**_evaluation(), "planned_success": None}, _evaluation()):
+        assert "P(success): simulated against planned" not in dict(map(tuple, evaluation_table(ev)))

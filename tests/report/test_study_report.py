@@ -561,3 +561,62 @@ def test_one_point_s_answer_says_whether_its_runs_show_the_target() -> None:
     assert answer(one(93, 100)).endswith(
         ": short of 0.95 at 95% confidence, and more runs will not lift a rate of 0.930"
     )
+
+
+def test_the_points_set_the_runs_success_beside_the_plan_s_chance_of_it() -> None:
+    """The summary's per-point `planned_success` (the plan's chance that a run meets its criteria)
+    against the runs' Wilson interval, in its own column only where some point's plan gives one,
+    and the plan's own answer to the study's question beside the runs' answer. 24 successes in 32
+    runs: Wilson's 95% interval is (p + z^2/2n -+ z sqrt(p(1-p)/n + z^2/4n^2)) / (1 + z^2/n) =
+    0.5789 to 0.8675 (z = 1.95996), so a plan of 0.59 agrees and one of 0.90 is optimistic; 31 of 32:
+    0.8426 to 0.9945, and a plan of 0.78 is conservative."""
+    from swarm.studies.study import StudySpec, summarize
+    from swarm.studies.sweep import parse_sweeps
+
+    spec = StudySpec(
+        str(ROOT / "missions" / "mine_clear.yaml"),
+        32,
+        parse_sweeps(["swarm.count=12,18"]),
+        seed=1,
+        target=0.9,
+    )
+
+    def table(chances: tuple[float | None, float | None]) -> pa.Table:
+        return pa.table(
+            {
+                "point": pa.array([0] * 32 + [1] * 32, pa.int32()),
+                "run": pa.array(list(range(32)) * 2, pa.int32()),
+                "success": [k < 24 for k in range(32)] + [k < 31 for k in range(32)],
+                "losses": [[]] * 64,
+                "completed_s": [1.0] * 64,
+                "planned_success": [chances[0]] * 32 + [chances[1]] * 32,
+            }
+        )
+
+    summary = summarize(spec, table((0.59, 0.78)))
+    points = summary["points"]
+    assert [p["planned_success"] for p in points] == [0.59, 0.78]
+    assert [p["wilson_low"] for p in points] == pytest.approx([0.5789, 0.8426], abs=1e-4)
+    rows = study_rows(summary)
+    assert column(rows, "plan's P(success)") == ["0.590 (agrees)", "0.780 (conservative)"]
+    assert column(study_rows(summarize(spec, table((0.90, 0.99)))), "plan's P(success)") == [
+        "0.900 (optimistic)",
+        "0.990 (agrees)",
+    ]
+    # the plan's answer: no swept size reaches 0.9 by the plan (0.78 at 18)
+    assert summary["required"]["planned"] == {"value": None, "chances": [[12, 0.59], [18, 0.78]]}
+    said = answer(summary)
+    assert said.endswith("; no swept plan expects P(success) >= 0.9 (the best, 18 robots, expects 0.780)")
+    reached = summarize(spec, table((0.59, 0.95)))
+    assert reached["required"]["planned"]["value"] == 18
+    assert answer(reached).endswith("; the plan expects P(success) >= 0.9 from 18 robots")
+    # a plan that gives no chance (a mission judged by a criterion it cannot give one for), or a
+    # table written before the column: no column, no plan's answer
+    none = summarize(spec, table((None, None)))
+    assert [p["planned_success"] for p in none["points"]] == [None, None]
+    assert "plan's P(success)" not in study_rows(none)[0]
+    assert none["required"]["planned"] is None and "plan" not in answer(none)
+    older = summarize(spec, table((0.5, 0.5)).drop(["planned_success"]))
+    assert [p["planned_success"] for p in older["points"]] == [None, None]
+    # drawn beside the runs' rates: the figure changes with the plan's chances
+    assert figs.success_png(summary) != figs.success_png(none)
