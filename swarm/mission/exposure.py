@@ -10,7 +10,7 @@ import dataclasses
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 import shapely
@@ -58,6 +58,10 @@ class Trips:
         return self.to_pieces_m + self.to_marks_m
 
 
+#: A polyline that never crosses the surf zone.
+NO_CROSSING = Crossing(0.0, 0.0, 0.0)
+
+
 @dataclass
 class WayIn:
     """One robot's planned exposure until its task's window ends, and where it is then."""
@@ -77,6 +81,8 @@ class WayIn:
     #: its exposure ashore on the way to its track, and along the track (`track_left`)
     before_track: budget.Exposure | None = None
     on_track: budget.Exposure | None = None
+    #: its track's way over the surf zone (the lanes run down to the waterline), at search speed
+    track_wet: Crossing = NO_CROSSING
 
 
 def at_work_s(ashore_s: float, approach_m: float, speed_mps: float) -> float:
@@ -288,6 +294,7 @@ def way_in(
         track_inside_m=track_inside,
         before_track=before,
         on_track=on_track,
+        track_wet=wet,
     )
 
 
@@ -303,15 +310,39 @@ def ways_in(
     ]
 
 
+class OffPlan(NamedTuple):
+    """What one robot drives beyond its planned route (`off_plan_driving`)."""
+
+    metres: dict[str, float]  # by terrain class
+    inside_m: float  # in the mine area, counted as `budget.Exposure.in_mine_area_m`
+    swash_s: float  # seconds among the breakers ashore, where the tracks run to the waterline
+    swash_hits: float  # those seconds times one breaker's hazard (`budget.Exposure.beach_breaker_hazard`)
+
+    def added_to(self, exposure: budget.Exposure) -> budget.Exposure:
+        """`exposure` with this driving too."""
+        seconds = exposure.beach_surf_s + self.swash_s
+        hits = exposure.beach_surf_s * exposure.beach_breaker_hazard + self.swash_hits
+        return dataclasses.replace(
+            exposure,
+            driven_m=add_metres(exposure.driven_m, self.metres),
+            in_mine_area_m=exposure.in_mine_area_m + self.inside_m,
+            beach_surf_s=seconds,
+            beach_breaker_hazard=hits / seconds if seconds > 0 else 0.0,
+        )
+
+
 def off_plan_driving(
     mission: Mission,
     cm: CostMap,
     plan: MissionPlan,
     ways: list[WayIn],
     done: Mapping[str, tuple[float, float]] | None = None,
-) -> tuple[list, dict[str, Trips]]:
+) -> tuple[list[OffPlan], dict[str, Trips]]:
     """What the scripted policy has robots drive beyond their planned routes, for each robot: the
-    metres on each class and in the mine area; and for each search, the metres of its trips
+    metres on each class and in the mine area, and its time among the breakers where the lost
+    tracks run to the waterline (mine_clear at 2 m breakers, 32 runs: 0.16 robots a run lost to
+    breakers on lost track and 0.06 on the way to a mark, which the plan did not count, beside
+    0.22 on their own routes); and for each search, the metres of its trips
     across the mine area (their sensors on, off the tracks). A reserve takes over what a lost
     searcher left of its track (`track_left`) in pieces of `budget.TAKEOVER_PIECE_M`, driving to
     each piece from where it waits: its spot, or before a clearance outside every found mine's
@@ -325,7 +356,7 @@ def off_plan_driving(
     `done[task]`: the share of the lost-track work the takers get done in time and the chance the
     marks are made (the budget's own answer, from a first pass without it): the takers drive only
     that. The returned trips are the whole work's, which is what its time is weighed from."""
-    out: list = [({}, 0.0) for _ in ways]
+    out = [OffPlan({}, 0.0, 0.0, 0.0) for _ in ways]
     trips_by_task: dict[str, Trips] = {}
     for s in plan.search:
         task = task_of(mission, s)
@@ -347,6 +378,7 @@ def off_plan_driving(
         trips = 0.0  # metres of trips, each at least the reach
         metres: dict[str, float] = {}
         inside = 0.0
+        swash_s, swash_hits = 0.0, 0.0
         losses_of = {k: budget.robot_losses(mission, cm, ways[k].exposure) for k in team}
         for k in searchers:
             losses = losses_of[k]
@@ -354,6 +386,9 @@ def off_plan_driving(
             for c, v in ways[k].track_m.items():
                 metres[c] = metres.get(c, 0.0) + share * left * v
             inside += share * left * ways[k].track_inside_m
+            wet = ways[k].track_wet
+            swash_s += share * left * wet.seconds
+            swash_hits += share * left * wet.seconds * wet.hazard_per_hit
             # a trip to each piece of what is left: ceil(left / piece), about half a piece more
             left_m = left * sum(ways[k].track_m.values())
             pieces = left_m / budget.TAKEOVER_PIECE_M + 0.5 * budget.lost_probability(losses)
@@ -376,12 +411,22 @@ def off_plan_driving(
         # while there; the marks count only the robots that last already)
         ashore = [budget.time_ashore(budget.robot_losses(mission, cm, ways[k].exposure)) for k in takers]
         trips_by_task[s.task] = Trips(to_pieces * float(np.mean(ashore)), trips - to_pieces)
+        # the trips cross the ground the tracks cover, the waterline as often as they do
         for k in searchers:
             for c, v in ways[k].track_m.items():
                 metres[c] = metres.get(c, 0.0) + driven * v / track_total
-        share = {c: v / len(takers) for c, v in metres.items()}
+            wet = ways[k].track_wet
+            swash_s += driven * wet.seconds / track_total
+            swash_hits += driven * wet.seconds * wet.hazard_per_hit / track_total
+        each = {c: v / len(takers) for c, v in metres.items()}
         for k in takers:
-            out[k] = (add_metres(out[k][0], share), out[k][1] + inside / len(takers))
+            mine = out[k]
+            out[k] = OffPlan(
+                add_metres(mine.metres, each),
+                mine.inside_m + inside / len(takers),
+                mine.swash_s + swash_s / len(takers),
+                mine.swash_hits + swash_hits / len(takers),
+            )
     return out, trips_by_task
 
 

@@ -1017,12 +1017,8 @@ def _budget_pass(
     unseen_blasts = 0.0  # mines expected to go off before any sensor found them
     holders: list[float] = []  # the relay and spare robots' shares of the window ashore
     extra, trips_m = exposure.off_plan_driving(mission, cm, driven, ways, done)
-    for rp, way, (more_m, more_inside) in zip(driven.robots, ways, extra, strict=True):
-        exposed = dataclasses.replace(
-            way.exposure,
-            driven_m=exposure.add_metres(way.exposure.driven_m, more_m),
-            in_mine_area_m=way.exposure.in_mine_area_m + more_inside,
-        )
+    for rp, way, more in zip(driven.robots, ways, extra, strict=True):
+        exposed = more.added_to(way.exposure)
         losses = budget.robot_losses(mission, cm, exposed)
         # what a study counts: every loss until beach operations end, not only the task's window
         until_end = max(mission.beach_end_s - way.ashore_s, 0.0)

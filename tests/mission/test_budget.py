@@ -522,13 +522,13 @@ def test_reserves_drive_more_the_more_searchers_are_expected_lost() -> None:
         _extras({**fixed, **more})
         for more in ({}, {"hazards.attrition.mtbf_h": 2.5}, {"hazards.enabled": False})
     )
-    total = [sum(sum(metres.values()) for metres, _ in extra) for extra in (calm, base, worse)]
+    total = [sum(sum(more.metres.values()) for more in extra) for extra in (calm, base, worse)]
     assert 0 < total[0] < total[1] < total[2]
     assert calm_trips.to_pieces_m == 0 < trips.to_pieces_m < worse_trips.to_pieces_m
     assert calm_trips.to_marks_m > trips.to_marks_m > worse_trips.to_marks_m > 0
     for extra, who in ((base, roles), (worse, worse_roles)):
         assert "spare" in who
-        assert all(not metres for (metres, _), role in zip(extra, who, strict=True) if role == "search")
+        assert all(not more.metres for more, role in zip(extra, who, strict=True) if role == "search")
     assert "spare" not in calm_roles
 
 
@@ -541,10 +541,13 @@ def test_the_takers_drive_only_the_work_they_get_done() -> None:
     extra, roles, trips, none, half, marks = _extras({"swarm.count": 15}, (0.0, 0.0), (0.5, 1.0), (1.0, 0.0))
 
     def total(out: tuple) -> float:
-        return sum(sum(metres.values()) for metres, _ in out[0])
+        return sum(sum(more.metres.values()) for more in out[0])
 
     def inside(out: tuple) -> float:
-        return sum(m for _, m in out[0])
+        return sum(more.inside_m for more in out[0])
+
+    def swash(out: tuple) -> float:
+        return sum(more.swash_s for more in out[0])
 
     whole = total((extra,))
     assert whole > 0 and total(none) == 0.0 and inside(none) == 0.0
@@ -552,8 +555,11 @@ def test_the_takers_drive_only_the_work_they_get_done() -> None:
     assert total(half) == pytest.approx(0.5 * (track + trips.to_pieces_m) + trips.to_marks_m)
     assert total(marks) == pytest.approx(track + trips.to_pieces_m)
     assert all(out[1]["beach_search"] == trips for out in (none, half, marks))
+    # the lanes run down to the waterline: the takers' time among the breakers scales alike
+    assert swash((extra,)) > 0 and swash(none) == 0.0
+    assert swash(half) == pytest.approx(0.5 * swash(marks) + swash((extra,)) - swash(marks))
     # 15 robots keep no reserves: the searchers that last take the work over, in equal shares
-    assert set(roles) == {"search"} and all(metres for metres, _ in extra)
+    assert set(roles) == {"search"} and all(more.metres for more in extra)
 
 
 def test_a_budget_pass_counts_the_takeovers_its_losses_leave_time_for() -> None:
