@@ -768,6 +768,7 @@ def _cmd_plan(args: argparse.Namespace) -> int:
         verdict_brief,
     )
     from swarm.sim.memory import check_fits
+    from swarm.studies.stats import agreement
     from swarm.studies.sweep import check_study_size
 
     _check_seed("--seed", args.seed)
@@ -832,10 +833,17 @@ def _cmd_plan(args: argparse.Namespace) -> int:
         for key, value in rows:
             print(f"  {key.ljust(width)}  {value}")
         if evaluation is not None:
+            chance = evaluation.get("planned_success")
+            wilson = (evaluation["wilson_low"], evaluation["wilson_high"])
             said = [
                 f"P(success) {evaluation['success_rate']:.2f} over {evaluation['runs']} runs "
-                f"({evaluation['wilson_low']:.2f} to {evaluation['wilson_high']:.2f}), "
-                f"target {evaluation['target']:g}"
+                f"({wilson[0]:.2f} to {wilson[1]:.2f}"
+                + (
+                    ""
+                    if chance is None
+                    else f"; plan {chance:.2f}: {agreement(chance, wilson, more_is_better=True)}"
+                )
+                + f"), target {evaluation['target']:g}"
             ]
             found, planned = (evaluation.get("detection") or {}).get("mean"), plan.expected_detection
             confidence = evaluation["confidence"]

@@ -590,8 +590,8 @@ def test_plan_evaluate_prints_the_detection_beside_the_plan_s(tmp_path, capsys) 
     printed = capsys.readouterr().out
     ev = json.loads((out / "evaluation.json").read_text())
     found = ev["detection"]["mean"]
-    (planned,) = json.loads((out / "plan.json").read_text())["budget"]["search"].values()
-    planned = planned["expected_detection_after_losses"]
+    (search,) = json.loads((out / "plan.json").read_text())["budget"]["search"].values()
+    planned = search["expected_detection_after_losses"]
     # the runs' Student t interval of the mean, and where the plan's expectation lies against it
     values = np.asarray(ev["detection_values"])
     sem = values.std(ddof=1) / np.sqrt(len(values))
@@ -603,6 +603,13 @@ def test_plan_evaluate_prints_the_detection_beside_the_plan_s(tmp_path, capsys) 
         f"detection {found:.1%} a run (95% interval {low:.1%} to {high:.1%}; plan {planned:.1%}: {said})"
         in line
     )
+    # judged by its mines found alone: the plan's chance of success is its search's after losses,
+    # against the runs' Wilson interval
+    chance = ev["planned_success"]
+    assert chance == pytest.approx(search["p_criterion_met_after_losses"], abs=5e-4)  # plan.json: 3 places
+    low, high = wilson_interval(ev["successes"], 3, 0.95)
+    said = "agrees" if low <= chance <= high else ("optimistic" if chance > high else "conservative")
+    assert f"({low:.2f} to {high:.2f}; plan {chance:.2f}: {said}), target 0.9" in line
 
 
 def test_planning_again_into_a_folder_replaces_its_evaluation(tmp_path, capsys) -> None:
