@@ -192,6 +192,11 @@ def _plan_cell(planned: object, interval: object, spec: str, *, more_is_better: 
     return f"{text} ({stats.agreement(_number(planned), bounds, more_is_better=more_is_better)})"
 
 
+def _gives_chances(summary: dict) -> bool:
+    """Whether some point's plan gives a chance of success (`planned_success`)."""
+    return any(_number(p.get("planned_success")) is not None for p in summary.get("points") or [])
+
+
 def _wilson(point: dict) -> list | None:
     """A point's Wilson interval of its success rate, as `_plan_cell` takes an interval."""
     low, high = _number(point.get("wilson_low")), _number(point.get("wilson_high"))
@@ -201,12 +206,13 @@ def _wilson(point: dict) -> list | None:
 def points_note(summary: dict) -> str:
     """What the point table's ± and the plan's verdicts mean."""
     confidence = summary.get("confidence", 0.95)
+    chances = _gives_chances(summary)
+    success = "; its P(success) against the runs' Wilson interval alike" if chances else ""
     return (
         f"A mean's ± is the half-width of its {percent(confidence)} t interval over the point's runs. "
         "The plan's expectation agrees when it lies inside that interval; outside it, it is optimistic "
         "when it promises fewer robots lost or more mines found than the runs give, conservative when "
-        f"fewer found or more lost; its P(success) against the runs' Wilson interval alike. A plan "
-        f"that holds misses its interval by chance in about "
+        f"fewer found or more lost{success}. A plan that holds misses its interval by chance in about "
         f"{percent(1 - confidence)} of points: more runs tell chance from a real miss."
     )
 
@@ -233,7 +239,7 @@ def study_rows(summary: dict) -> list[list[str]]:
     ]
     confidence = summary.get("confidence", 0.95)
     target = _number(summary.get("target"))
-    chances = any(_number(p.get("planned_success")) is not None for p in summary.get("points") or [])
+    chances = _gives_chances(summary)
     head = keys or ["point"]
     # a point that could not run says why, in a last column there only when one could not
     why = any(p.get("infeasible") for p in summary.get("points") or [])

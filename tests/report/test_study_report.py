@@ -16,7 +16,7 @@ import pytest
 from PIL import Image
 
 from swarm.report import study_figures as figs
-from swarm.report.study_report import answer, loss_rows, study_rows, write_study_report
+from swarm.report.study_report import answer, loss_rows, points_note, study_rows, write_study_report
 from swarm.sim.hazards import CAUSES
 from swarm.studies.table import CRITERIA, schema
 from swarm.world.io import load_map
@@ -615,6 +615,7 @@ def test_the_points_set_the_runs_success_beside_the_plan_s_chance_of_it() -> Non
     none = summarize(spec, table((None, None)))
     assert [p["planned_success"] for p in none["points"]] == [None, None]
     assert "plan's P(success)" not in study_rows(none)[0]
+    assert "Wilson interval alike" in points_note(summary) and "Wilson" not in points_note(none)
     assert none["required"]["planned"] is None and "plan" not in answer(none)
     older = summarize(spec, table((0.5, 0.5)).drop(["planned_success"]))
     assert [p["planned_success"] for p in older["points"]] == [None, None]
