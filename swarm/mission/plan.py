@@ -975,13 +975,38 @@ def _budget(mission: Mission, plan: MissionPlan) -> dict:
         launches = np.array([rp.launch_m for rp in plan.robots])
         way_out = exposure.WayOut(mission, cm, pickup_points(mission, launches))
     ways = exposure.ways_in(mission, cm, driven.robots, zone, ashore, mine_area, by_task)
+    seen = _routes_detection(mission, plan, mine_area)
     done: dict[str, tuple[float, float]] = {}
     for _ in range(BUDGET_PASSES):
-        out, now = _budget_pass(mission, plan, driven, ways, way_out, router, zone, mine_area, done)
+        out, now = _budget_pass(mission, plan, driven, ways, way_out, router, zone, mine_area, seen, done)
         moved = [np.abs(np.subtract(shares, done.get(t, (1.0, 1.0)))).max() for t, shares in now.items()]
         if max(moved, default=0.0) <= DONE_TOLERANCE:
             break
         done = now
+    return out
+
+
+def _routes_detection(mission: Mission, plan: MissionPlan, mine_area: shapely.Geometry | None) -> dict:
+    """Each search's expected detection with every robot's planned route across the mine area
+    counted too: every robot's sensor is on ashore, so landers', spares' and observers' routes
+    search as well (the trips off the plan count in the budget, after the losses). None of a
+    search without routes or mine area."""
+    lines = [
+        LineString(w)
+        for rp in plan.robots
+        if len(w := np.vstack([rp.ground_m.reshape(-1, 2), rp.track_m])) >= 2
+    ]
+    if not lines or mine_area is None:
+        return {}
+    cm = plan.costmap
+    segments = drivable_segments(lines, cm)
+    out = {}
+    for s in plan.search:
+        task = exposure.task_of(mission, s)
+        model = "random" if s.model == "random_search" else s.model
+        out[s.task] = detection.expected_detection(
+            mine_area, segments, model, s.sweep_width_m, _lateral_range(task.sensor), ground=cm
+        )
     return out
 
 
@@ -994,11 +1019,14 @@ def _budget_pass(
     router: Router,
     zone: SurfZone,
     mine_area: shapely.Geometry | None,
+    seen: dict[str, float],
     done: dict[str, tuple[float, float]],
 ) -> tuple[dict, dict[str, tuple[float, float]]]:
     """One pass of `_budget` with the takers driving the shares `done` of their work
-    (`exposure.off_plan_driving`); returns the budget and each search's shares of it done by its
-    losses: the lost-track work's, and the chance its marks are made."""
+    (`exposure.off_plan_driving`), each search's detection that of the planned routes `seen`
+    (`_routes_detection`, set after the takers' driving, which counts the tracks' own); returns
+    the budget and each search's shares of it done by its losses: the lost-track work's, and the
+    chance its marks are made."""
     cm = plan.costmap
     per_phase: dict[str, dict[str, float]] = {p: {} for p in budget.PHASE_NAMES}
     back = mission.phases.return_to_sea
@@ -1084,24 +1112,10 @@ def _budget_pass(
     expended_after: dict[str, float] = {}  # losses by the clock the markers would have had after the blast
     markers = [0.0, 0.0]  # robots the clearances expend: at least, at most
     for s in plan.search:
-        # every robot's sensor is on ashore: the planned routes of landers, spares and observers
-        # across the mine area count too (the trips off the plan count below, after the losses)
-        lines = [
-            LineString(w)
-            for rp in plan.robots
-            if len(w := np.vstack([rp.ground_m.reshape(-1, 2), rp.track_m])) >= 2
-        ]
+        if s.task in seen:
+            s.expected_detection = seen[s.task]
         task = exposure.task_of(mission, s)
         model = "random" if s.model == "random_search" else s.model
-        if lines and mine_area is not None:
-            s.expected_detection = detection.expected_detection(
-                mine_area,
-                drivable_segments(lines, cm),
-                model,
-                s.sweep_width_m,
-                _lateral_range(task.sensor),
-                ground=cm,
-            )
         need = need_s.get(s.task, 0.0)
         # the work left over in a run, not in the mean run: losses vary from run to run; the
         # drives to the lost tracks' pieces take their time out of the slack

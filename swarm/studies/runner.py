@@ -140,14 +140,10 @@ def run_batch(tasks: list[RunTask], working: Callable[[float], None] | None = No
     return [_row(t, mission, plan, log, share) for t, log in zip(tasks, logs, strict=True)]
 
 
-def _planned_success(mission, plan) -> float | None:
-    from swarm.mission.plan import success_chance
-
-    return success_chance(mission, plan)
-
-
 def _row(task: RunTask, mission, plan, log, runtime_s: float) -> dict:
     """One run's row of the results table."""
+    from swarm.mission.plan import success_chance
+
     row: dict = {"point": task.point, "run": task.run, "seed": task.seed}
     row.update(task.cells)
     row["robots"] = mission.swarm.count
@@ -163,7 +159,7 @@ def _row(task: RunTask, mission, plan, log, runtime_s: float) -> dict:
         row[f"lost_{c}"] = causes.get(c, 0)
     row["planned_lost"] = plan.expected_lost
     row["planned_detection"] = plan.expected_detection
-    row["planned_success"] = _planned_success(mission, plan)
+    row["planned_success"] = success_chance(mission, plan)
     summary = log.summary()
     row.update({c: int(summary[c]) for c in MINE_COUNTS})
     row.update({c: int(summary["end_states"].get(c, 0)) for c in END_COUNTS})
