@@ -1198,7 +1198,14 @@ def _add_study_command(commands) -> None:
 
 def _cmd_study(args: argparse.Namespace) -> int:
 
-    from swarm.report.study_report import answer, points_note, study_rows, write_study_report
+    from swarm.report.study_report import (
+        answer,
+        cause_rows,
+        causes_note,
+        points_note,
+        study_rows,
+        write_study_report,
+    )
     from swarm.studies.backends import default_workers
     from swarm.studies.study import StudySpec, run_study
     from swarm.studies.sweep import Sweep, check_points, check_study_size, parse_sweeps
@@ -1262,7 +1269,12 @@ def _cmd_study(args: argparse.Namespace) -> int:
         print()
         print(_table(study_rows(summary)))
         print(points_note(summary))
-        if summary["losses_by_cause"]:
+        causes = cause_rows(summary)
+        if causes:
+            print()
+            print(_table(causes))
+            print(causes_note(summary))
+        elif summary["losses_by_cause"]:
             print()
             print("losses: " + ", ".join(f"{c} {n}" for c, n in summary["losses_by_cause"].items()))
         names = ["results.parquet", "summary.json", *(p.name for p in paths.values())]

@@ -218,6 +218,18 @@ class MissionPlan:
         return float(self.budget["expected_lost"]) if self.budget.get("hazards") else None
 
     @property
+    def expected_lost_by_cause(self) -> dict[str, float] | None:
+        """Robots the plan expects to lose to each cause, over every phase (the way back too): the
+        parts of `expected_lost`, as a study's runs count their losses; None with the hazards off."""
+        if self.expected_lost is None:
+            return None
+        out: dict[str, float] = {}
+        for causes in (self.budget.get("expected_losses") or {}).values():
+            for cause, robots in causes.items():
+                out[cause] = out.get(cause, 0.0) + float(robots)
+        return out
+
+    @property
     def expected_detection(self) -> float | None:
         """The share of the mines the plan expects found after its losses (`budget`), over every
         search weighted by its expected mines (each search's own where none is expected), as a
@@ -1061,7 +1073,9 @@ def _budget_pass(
             home = exposure.way_back(mission, cm, way.last_m, way_out, router, zone)
             for cause, p in budget.return_losses(mission, cm, home).items():
                 way_back[cause] = way_back.get(cause, 0.0) + still * p
-        unseen_blasts += expected["beach"].get("mine", 0.0) * budget.unseen_share(mission, exposed.speed_mps)
+        unseen_blasts += expected["beach"].get("mine", 0.0) * budget.unseen_share(
+            mission, exposed.speed_mps, budget.main_ground(mission, exposed)
+        )
         if rp.role in ("relay", "spare"):  # a spare takes a lost relay's position (`swarm.sim.policy`)
             holders.append(budget.time_ashore(whole))
         if way.search is not None:

@@ -608,6 +608,14 @@ def evaluation_table(
                 ),
             ]
         )
+    by_cause = ev.get("lost_by_cause") or []
+    if by_cause:
+        pairs = ", ".join(
+            f"{c['cause']} {c['mean']:.2f} / {c['planned']:.2f} "
+            f"({stats.agreement(c['planned'], c['interval'], more_is_better=False) or 'no interval'})"
+            for c in by_cause
+        )
+        rows.append(["lost per run by cause: simulated / planned", pairs])
     for key, label in (
         ("expended", "robots expended in the clearance per run"),
         ("recovered", "robots back at sea per run"),

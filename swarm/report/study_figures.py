@@ -295,6 +295,47 @@ def agreement_png(summary: dict) -> bytes | None:
     return png_bytes(fig)
 
 
+def causes_png(summary: dict) -> bytes | None:
+    """Robots lost a run to each cause against the plan's expectation: per cause, each point's runs'
+    mean with its interval (`summarize`'s `lost_by_cause`) and the plan's value as a hollow marker
+    around it, as `agreement_png` draws them; None when no point's plan gives its losses by cause."""
+    points = [p for p in summary.get("points") or [] if p.get("lost_by_cause")]
+    if not points:
+        return None
+    by_point = [{c["cause"]: c for c in p["lost_by_cause"]} for p in points]
+    causes = ordered_causes({c for found in by_point for c in found})
+    fig, ax = new_figure(max(5.5, min(1.1 * len(causes) + 0.25 * len(causes) * len(points) + 2.0, 14.0)), 3.8,
+                         layout="constrained")  # fmt: skip
+    x = np.arange(len(causes), dtype=float)
+    step = 0.8 / max(len(points), 1)
+    for i, (point, found) in enumerate(zip(points, by_point, strict=True)):
+        colour, marker, _ = SERIES_STYLES[i % len(SERIES_STYLES)]
+        at = x - 0.4 + step * (i + 0.5)
+        empty = {"mean": 0.0, "interval": None, "planned": 0.0}
+        rows = [found.get(c, empty) for c in causes]
+        mean = np.array([r["mean"] for r in rows], dtype=float)
+        bounds = np.array([r["interval"] or [r["mean"], r["mean"]] for r in rows], dtype=float)
+        name = short_label(point.get("params", {})) if len(points) > 1 else ""
+        ax.errorbar(at, mean, yerr=[np.clip(mean - bounds[:, 0], 0, None),
+                    np.clip(bounds[:, 1] - mean, 0, None)], color=colour, marker=marker, ls="none", ms=5,
+                    capsize=3, lw=1.4, label=f"runs{': ' + name if name else ''}", zorder=5)  # fmt: skip
+        planned = [(a, r["planned"]) for a, r in zip(at, rows, strict=True) if r["planned"] is not None]
+        if planned:
+            px, py = zip(*planned, strict=True)
+            ax.plot(px, py, ls="none", marker=marker, ms=9, mfc="none", mec=colour,
+                    mew=1.3, label=f"plan{': ' + name if name else ''}", zorder=6)  # fmt: skip
+    ax.set_xticks(x, [as_words(c) for c in causes])
+    plt.setp(ax.get_xticklabels(), rotation=20, ha="right")
+    ax.set_ylabel("robots lost per run")
+    ax.set_ylim(bottom=0.0)
+    ax.grid(axis="x", visible=False)
+    ax.legend(fontsize=7, frameon=False, ncols=2 if len(points) > 3 else 1)
+    confidence = summary.get("confidence", 0.95)
+    ax.set_title(f"the plan's expectation (hollow) against the runs' mean with its {confidence:.0%} interval",
+                 fontsize=9)  # fmt: skip
+    return png_bytes(fig)
+
+
 def ordered_phases(names: Sequence[str]) -> list[str]:
     """Phases in mission order (`PHASES`), unknown ones after, sorted."""
     present = set(names)

@@ -343,6 +343,45 @@ def loss_rows(summary: dict) -> list[list[str]]:
     return rows
 
 
+def cause_rows(summary: dict) -> list[list[str]]:
+    """Each cause's robots lost a run against the plan's expectation, a pair of columns a point
+    (`summarize`'s `lost_by_cause`): the runs' mean with its interval's half-width, the plan's
+    value with its verdict; a cause in a row where any point's runs lost a robot to it or its plan
+    expects some. Empty when no point's plan gives its losses by cause."""
+    points = [p for p in summary.get("points") or [] if p.get("lost_by_cause")]
+    if not points:
+        return []
+    by_point = [{c["cause"]: c for c in p["lost_by_cause"]} for p in points]
+    causes = figs.ordered_causes({c for found in by_point for c in found})
+    if len(points) == 1:
+        head = ["runs: lost per run", "plan's expectation"]
+    else:
+        head = [f"{point_label(p.get('params', {}))}: {what}" for p in points for what in ("runs", "plan")]
+    rows = [["cause", *head]]
+    for cause in causes:
+        cells = []
+        for found in by_point:
+            c = found.get(cause, {"mean": 0.0, "interval": None, "planned": 0.0})
+            cells += [
+                _mean_cell(c["mean"], c["interval"], ".2f"),
+                _plan_cell(c["planned"], c["interval"], ".2f", more_is_better=False),
+            ]
+        rows.append([cause, *cells])
+    return rows
+
+
+def causes_note(summary: dict) -> str:
+    """What the cause table's ± and verdicts mean."""
+    confidence = summary.get("confidence", 0.95)
+    return (
+        f"A cause's ± is the half-width of the {percent(confidence)} interval of its robots lost a run "
+        "(t, or Garwood's Poisson interval where every run lost as many). Where the plan's expected "
+        "losses and the runs' part ways, this says which cause they part on: the plan is optimistic "
+        "where it expects fewer lost than the runs give, conservative where more. With many causes, "
+        f"some miss their interval by chance ({percent(1 - confidence)} each when the plan holds)."
+    )
+
+
 def figures(
     table: pa.Table, summary: dict, beach_map: BeachMap | None
 ) -> list[tuple[str, bytes | None, str]]:
@@ -374,6 +413,14 @@ def _figures(
             "their t intervals, point by point",
             absent="No plan's expectation to compare: the results table has no planned_lost or "
             "planned_detection column, or the mission has no hazards and no search.",
+        ),
+        Figure(
+            "Losses by cause: the plan against its runs",
+            lambda: figs.causes_png(summary),
+            alt="Robots lost per run to each cause, the runs' means with their intervals beside the plan's "
+            "expectation, point by point",
+            absent="No plan's losses by cause to compare: the mission has no hazards, or the results "
+            "table was written before the plan's losses by cause were kept.",
         ),
         Figure(
             "Robots lost per run, by cause and phase",
@@ -461,6 +508,9 @@ def study_report(
     losses = loss_rows(data)
     if losses:
         blocks.append(Table("Losses by cause and phase, all runs", losses))
+    causes = cause_rows(data)
+    if causes:
+        blocks.append(Table("Losses by cause: the runs against the plan", causes, note=causes_note(data)))
     blocks += _figures(table, _ran(summary), beach_map, no_map)
     h = data["header"]
     return Report(

@@ -118,6 +118,8 @@ def evaluate_plan(
         # robots the clearance expended (one a mine cleared) and robots back at sea
         **{c: stats.distribution(np.asarray(v, dtype=np.float64)) if v else None for c, v in ends.items()},
         "losses_by_cause": point["losses_by_cause"],
+        # each cause's robots lost a run with its interval, beside the plan's (`summarize`)
+        "lost_by_cause": point.get("lost_by_cause") or [],
         "losses_by_phase": point["losses_by_phase"],
         "seeds": cols["seed"],
         "folder": str(folder / "plan"),

@@ -158,6 +158,9 @@ def _row(task: RunTask, mission, plan, log, runtime_s: float) -> dict:
     for c in CAUSES:
         row[f"lost_{c}"] = causes.get(c, 0)
     row["planned_lost"] = plan.expected_lost
+    by_cause = plan.expected_lost_by_cause
+    for c in CAUSES:
+        row[f"planned_lost_{c}"] = None if by_cause is None else by_cause.get(c, 0.0)
     row["planned_detection"] = plan.expected_detection
     row["planned_success"] = success_chance(mission, plan)
     summary = log.summary()

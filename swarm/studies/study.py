@@ -24,6 +24,7 @@ import pyarrow as pa
 import swarm
 from swarm.errors import SwarmError
 from swarm.files import folder_lock, write_text_atomic
+from swarm.sim.hazards import CAUSES
 from swarm.studies import backends, stats
 from swarm.studies.runner import RunTask, run_seed
 from swarm.studies.store import ResultStore
@@ -212,6 +213,8 @@ def summarize(spec: StudySpec, table: pa.Table) -> dict:
     found = cols.get("value_detection") or [None] * len(point_of)
     planned_found = cols.get("planned_detection") or [None] * len(point_of)
     planned_success = cols.get("planned_success") or [None] * len(point_of)
+    lost_to = {c: cols.get(f"lost_{c}") or [0] * len(point_of) for c in CAUSES}
+    planned_to = {c: cols.get(f"planned_lost_{c}") or [None] * len(point_of) for c in CAUSES}
     ends = {c: cols.get(c) or [None] * len(point_of) for c in ("mines_cleared", "recovered")}
     out_points = []
     for p, params in enumerate(spec.points()):
@@ -242,6 +245,8 @@ def summarize(spec: StudySpec, table: pa.Table) -> dict:
                     [len(losses[i]) for i in mine], spec.confidence, max((robots[i] for i in mine), default=0)
                 ),
                 "planned_lost": _first_of(planned, mine),
+                # each cause's robots lost a run against the plan's, where the plan has them
+                "lost_by_cause": _by_cause(lost_to, planned_to, mine, spec.confidence, robots),
                 # the mines found a run against the plan's expectation after its losses
                 "detection_mean": _mean_of([found[i] for i in mine]),
                 "detection_interval": _interval_of([found[i] for i in mine], spec.confidence, (0.0, 1.0)),
@@ -273,6 +278,31 @@ def summarize(spec: StudySpec, table: pa.Table) -> dict:
         "losses_by_phase": by_phase,
         "version": getattr(swarm, "__version__", "unknown"),
     }
+
+
+def _by_cause(
+    lost_to: dict[str, list], planned_to: dict[str, list], rows: np.ndarray, confidence: float, robots: list
+) -> list[dict]:
+    """Of a point's runs `rows`, each cause's robots lost a run (mean and `_count_interval`) and
+    the plan's expectation, for the causes the runs lost robots to or the plan expects any from;
+    empty where the table has no plan's expectation by cause (no hazards, or an older table)."""
+    if not len(rows) or all(_first_of(planned_to[c], rows) is None for c in CAUSES):
+        return []
+    most = max((robots[i] for i in rows), default=0)
+    out = []
+    for c in CAUSES:
+        counts = [lost_to[c][i] or 0 for i in rows]
+        planned = _first_of(planned_to[c], rows)
+        if any(counts) or (planned or 0.0) > 0.0:
+            out.append(
+                {
+                    "cause": c,
+                    "mean": float(np.mean(counts)),
+                    "interval": _count_interval(counts, confidence, most),
+                    "planned": planned,
+                }
+            )
+    return out
 
 
 def _first_of(values: list, rows: np.ndarray) -> float | None:

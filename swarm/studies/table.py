@@ -17,6 +17,10 @@ Columns, in order:
 - ``planned_lost`` (float64): the robots the point's plan expects to lose (its budget's
   ``expected_lost``, the same in each of the point's rows), to set beside ``lost``; null with the
   hazards off, and in tables written before it existed.
+- ``planned_lost_<cause>`` (float64) for each cause of `swarm.sim.hazards.CAUSES`: the robots the
+  point's plan expects to lose to that cause (`MissionPlan.expected_lost_by_cause`, 0 for a cause
+  it does not expect), to set beside ``lost_<cause>``; null as ``planned_lost`` is, and in tables
+  written before they existed.
 - ``planned_detection`` (float64): the share of the mines the point's plan expects found after its
   losses (`MissionPlan.expected_detection`), to set beside ``value_detection``; null without a
   search, and in tables written before it existed.
@@ -85,7 +89,9 @@ def schema(sweep_types: Sequence[tuple[str, pa.DataType]]) -> pa.Schema:
         fields += [pa.field(f"value_{c}", pa.float64()), pa.field(f"met_{c}", pa.bool_())]
     fields += [pa.field("lost", pa.int32())]
     fields += [pa.field(f"lost_{c}", pa.int32()) for c in CAUSES]
-    fields += [pa.field("planned_lost", pa.float64()), pa.field("planned_detection", pa.float64())]
+    fields += [pa.field("planned_lost", pa.float64())]
+    fields += [pa.field(f"planned_lost_{c}", pa.float64()) for c in CAUSES]
+    fields += [pa.field("planned_detection", pa.float64())]
     fields += [pa.field("planned_success", pa.float64())]
     fields += [pa.field(c, pa.int32()) for c in OUTCOME_COUNTS]
     fields += [

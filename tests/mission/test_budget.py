@@ -79,13 +79,27 @@ def test_hidden_rocks_are_met_per_metre_on_land_as_the_simulator_lays_them(costm
     assert none["beach"]["rock"] == pytest.approx(1 - math.exp(-rocks.damage_per_km * 0.2))
 
 
+def _missed(w: float, y: float, ahead: float) -> float:
+    """The inverse-cube sensor's miss of a mine at offset y from a straight approach from afar to
+    `ahead` short of it: the rate W^2/(8 pi) / r^3 integrated numerically along the track."""
+    from scipy import integrate
+
+    look, _ = integrate.quad(lambda s: (s * s + y * y) ** -1.5, ahead, np.inf)
+    return math.exp(-(w**2) / (8 * math.pi) * look)
+
+
 def test_a_mine_met_undetected_is_rare_with_an_inverse_cube_sensor(mission) -> None:
-    """Dead ahead, a mine is looked at with integral ds/r^3 = 1/(2 r^2) before the robot is within
-    the trigger radius r: missed with exp(-W^2/(8 pi) / (2 r^2))."""
-    w = mission.tasks_of("search")[0].sensor.width_m
-    assert budget.undetected_at_contact(mission) == pytest.approx(
-        math.exp(-(w**2) / (8 * math.pi) / (2 * 0.25**2))
-    )
+    """A mine the robot meets lies anywhere within the trigger radius r of its track; at offset y
+    the robot is on it sqrt(r^2 - y^2) short of abreast, having looked at it all the way from
+    afar: the miss averaged over y, by numerical integration of the rate."""
+    from scipy import integrate
+
+    w, r = mission.tasks_of("search")[0].sensor.width_m, budget.TRIGGER_RADIUS_M
+    mean, _ = integrate.quad(lambda y: _missed(w, y, math.sqrt(r * r - y * y)), 0.0, r)
+    assert budget.undetected_at_contact(mission) == pytest.approx(mean / r, rel=1e-3)
+    # off the line the robot is on it sooner along the track, having looked longer: missed less
+    # than dead ahead
+    assert budget.undetected_at_contact(mission) < _missed(w, 0.0, r)
 
 
 def test_a_mine_met_undetected_with_a_tabulated_curve_misses_by_the_curve_near_zero() -> None:
@@ -424,14 +438,18 @@ def test_the_markers_are_the_mean_of_the_smaller_of_two_random_counts(poisson: b
 
 
 def test_the_simulator_s_step_and_contact_radii_are_the_budget_s() -> None:
-    """The budget's mine model counts one simulator step of travel after a find and the simulator's
-    trigger radius, its rock model the simulator's hidden-rock contact radius; they live in the
-    simulator, below this layer, so they are checked here."""
+    """The budget's mine model hears a find at the end of a simulator step and turns the robot away
+    at the simulator's substep toward the side-step's first point, within the simulator's trigger
+    radius; its rock model counts the simulator's hidden-rock contact radius. They live in the
+    simulator, above this layer, so they are checked here."""
     from swarm.sim.env import SimConfig
     from swarm.sim.hazards import ROCK_CONTACT_M
     from swarm.sim.mines import DEFAULT_TRIGGER_RADIUS_M
+    from swarm.sim.routes import SIDESTEP_CLEAR_M
 
     assert SimConfig().dt_s == budget.REACTION_S
+    assert SimConfig().substep_s == budget.SUBSTEP_S
+    assert budget.SIDESTEP_M == SIDESTEP_CLEAR_M
     assert budget.TRIGGER_RADIUS_M == DEFAULT_TRIGGER_RADIUS_M
     assert budget.ROCK_CONTACT_M == ROCK_CONTACT_M
 
@@ -445,16 +463,34 @@ def test_the_policy_s_takeover_pieces_and_standoff_margin_are_the_budget_s() -> 
     assert budget.STANDOFF_MARGIN_M == policy.STANDOFF_MARGIN_M
 
 
-@pytest.mark.parametrize("speed", [0.0, 0.3, 0.6])
+@pytest.mark.parametrize("speed", [0.3, 0.54])
+def test_a_robot_told_of_a_mine_ahead_turns_away_in_place(mission, speed) -> None:
+    """Told of a mine just ahead, the robot pivots (the side-step begins abreast of it) and then
+    drives off to the side: in the first step it runs on less than a step's travel (the wheels
+    turning it brake it), it never gets a step's travel ahead, and it moves ever further aside, out
+    of the trigger radius; a slower robot runs on less."""
+    path = budget.turn_away_path(mission, speed, "wet_hard_sand")
+    step = budget.REACTION_S * speed
+    assert 0.0 < path[0, 0] < step
+    assert path[:, 0].max() < step
+    assert np.all(np.diff(path[:, 1]) > 0) and path[-1, 1] > budget.TRIGGER_RADIUS_M
+    slower = budget.turn_away_path(mission, speed / 2, "wet_hard_sand")
+    assert slower[:, 0].max() < path[:, 0].max()
+
+
+@pytest.mark.parametrize("speed", [0.3, 0.54, 0.8])
 def test_a_mine_found_too_late_to_turn_counts_as_met_undetected(mission, speed) -> None:
-    """Dead ahead, the robot keeps off a mine only if its sensor finds it a step's travel before
-    the trigger radius: missed with exp(-W^2 / (16 pi d^2)), d = r + v dt; faster is riskier."""
-    w = mission.tasks_of("search")[0].sensor.width_m
-    d = budget.TRIGGER_RADIUS_M + budget.REACTION_S * speed
-    assert budget.undetected_at_contact(mission, speed) == pytest.approx(
-        math.exp(-(w**2) / (16 * math.pi * d * d))
-    )
-    assert budget.undetected_at_contact(mission, speed + 0.1) > budget.undetected_at_contact(mission, speed)
+    """A find is heard at the end of a step and the robot turns away from the next, so a mine is
+    met unless found before the last end of a step from which the turn keeps the robot off it:
+    missed more than one the robot only has to see before it is on it (at no speed), and less
+    than the least-looked-at case (at the trigger radius's edge, told a step's travel beyond the
+    run-on), by numerical integration of the rate; faster is riskier."""
+    w, r = mission.tasks_of("search")[0].sensor.width_m, budget.TRIGGER_RADIUS_M
+    path = budget.turn_away_path(mission, speed, "wet_hard_sand")
+    run_on = path[path[:, 1] < r, 0].max()
+    got = budget.undetected_at_contact(mission, speed, "wet_hard_sand")
+    assert budget.undetected_at_contact(mission) < got < _missed(w, r, r + run_on + budget.REACTION_S * speed)
+    assert budget.undetected_at_contact(mission, speed + 0.1, "wet_hard_sand") > got
 
 
 def test_expected_losses_by_cause_count_a_robot_once() -> None:

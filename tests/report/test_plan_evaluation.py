@@ -137,6 +137,18 @@ def test_the_table_says_whether_the_plan_agrees_with_its_runs() -> None:
     assert "detection per run: simulated against planned" not in dict(
         map(tuple, evaluation_table(ev, expected))
     )
+    # each cause against the plan's, with the runs' interval: 4.0 planned failures above 1.9 to
+    # 3.7 lost is conservative, 0.2 mines inside 0.1 to 0.9 agrees
+    by_cause = [
+        {"cause": "failure", "mean": 2.8, "interval": [1.9, 3.7], "planned": 4.0},
+        {"cause": "mine", "mean": 0.5, "interval": [0.1, 0.9], "planned": 0.2},
+    ]
+    rows = dict(map(tuple, evaluation_table({**ev, "lost_by_cause": by_cause}, expected)))
+    assert rows["lost per run by cause: simulated / planned"] == (
+        "failure 2.80 / 4.00 (conservative), mine 0.50 / 0.20 (agrees)"
+    )
+    without = dict(map(tuple, evaluation_table(ev, expected)))
+    assert "lost per run by cause: simulated / planned" not in without
 
 
 def _search_plan(p_after: float, confidence: float | None) -> dict:

@@ -16,7 +16,14 @@ import pytest
 from PIL import Image
 
 from swarm.report import study_figures as figs
-from swarm.report.study_report import answer, loss_rows, points_note, study_rows, write_study_report
+from swarm.report.study_report import (
+    answer,
+    cause_rows,
+    loss_rows,
+    points_note,
+    study_rows,
+    write_study_report,
+)
 from swarm.sim.hazards import CAUSES
 from swarm.studies.table import CRITERIA, schema
 from swarm.world.io import load_map
@@ -502,6 +509,69 @@ def test_the_points_say_whether_the_plan_agrees_with_its_runs() -> None:
     # a summary from before the intervals: the bare numbers
     bare = [{k: v for k, v in p.items() if not k.endswith("_interval")} for p in points]
     assert column(study_rows({"points": bare}), "plan's expected losses") == ["1.50", "5.00"]
+
+
+def test_each_cause_s_losses_are_held_against_the_plan_s(tmp_path) -> None:
+    """`summarize` gives each cause's robots lost a run with its interval beside the plan's
+    `planned_lost_<cause>`, worked by hand: a t interval where the runs differ, Garwood's where
+    they all lost as many; a cause neither the runs nor the plan have is left out; the cause table
+    reads them as the points table reads the total, a pair of columns a point."""
+    from swarm.studies.study import StudySpec, summarize
+    from swarm.studies.sweep import parse_sweeps
+
+    spec = StudySpec(
+        str(ROOT / "missions" / "mine_clear.yaml"), 4, parse_sweeps(["swarm.count=12,24"]), seed=1
+    )
+    failure, mine = [3, 4, 5, 4, 1, 1, 1, 1], [0, 1, 0, 0, 0, 0, 0, 0]
+    columns = {f"lost_{c}": [0] * 8 for c in CAUSES} | {f"planned_lost_{c}": [0.0] * 8 for c in CAUSES}
+    columns["lost_failure"], columns["lost_mine"] = failure, mine
+    columns["planned_lost_failure"] = [6.0] * 4 + [1.2] * 4
+    columns["planned_lost_mine"] = [0.3] * 4 + [0.0] * 4
+    columns["planned_lost_rock"] = [0.5] * 4 + [2.5] * 4
+    losses = [
+        [{"cause": "failure", "phase": "beach"}] * f + [{"cause": "mine", "phase": "beach"}] * m
+        for f, m in zip(failure, mine, strict=True)
+    ]
+    table = pa.table(
+        {
+            "point": pa.array([0] * 4 + [1] * 4, pa.int32()),
+            "run": pa.array([0, 1, 2, 3] * 2, pa.int32()),
+            "success": [True] * 8,
+            "losses": losses,
+            "completed_s": [1.0] * 8,
+            **columns,
+        }
+    )
+    points = summarize(spec, table)["points"]
+    first = {c["cause"]: c for c in points[0]["lost_by_cause"]}
+    second = {c["cause"]: c for c in points[1]["lost_by_cause"]}
+    assert list(first) == ["failure", "rock", "mine"] and list(second) == ["failure", "rock"]
+    # failures 3, 4, 5, 4: mean 4, s.d. sqrt(2/3), half-width 3.1824 * 0.8165 / 2 = 1.299
+    assert first["failure"]["mean"] == 4.0
+    assert first["failure"]["interval"] == pytest.approx([4 - 1.2992, 4 + 1.2992], abs=1e-4)
+    # no rock in 4 runs: Garwood's upper limit of a count of 0, chi2(0.975, 2) / 2 = 3.689, over 4
+    assert first["rock"]["interval"] == pytest.approx([0.0, 3.689 / 4], abs=1e-3)
+    # every run lost 1 to failure: Garwood's limits of a count of 4 (1.090 to 10.242) over 4 runs
+    assert second["failure"]["interval"] == pytest.approx([1.090 / 4, 10.242 / 4], abs=1e-3)
+    assert (first["mine"]["mean"], first["mine"]["planned"]) == (0.25, 0.3)
+    rows = cause_rows({"points": points})
+    assert rows[0] == ["cause", "swarm.count = 12: runs", "swarm.count = 12: plan", "swarm.count = 24: runs",
+                       "swarm.count = 24: plan"]  # fmt: skip
+    by_cause = {r[0]: r[1:] for r in rows[1:]}
+    # 6.0 above 2.70 to 5.30: more lost than the runs give; 1.2 inside 0.27 to 2.56
+    assert by_cause["failure"] == ["4.00 ± 1.30", "6.00 (conservative)", "1.00 ± 1.56", "1.20 (agrees)"]
+    # 2.5 rocks a run where 4 runs lost none (at most 0.92): conservative; 0.5 agrees
+    assert by_cause["rock"][1] == "0.50 (agrees)" and by_cause["rock"][3] == "2.50 (conservative)"
+    # a point without the cause shows its zeros
+    assert by_cause["mine"][2:] == ["0.00", "0.00"]
+    one = cause_rows({"points": points[:1]})
+    assert one[0] == ["cause", "runs: lost per run", "plan's expectation"]
+    # a table from before the plan's losses by cause: no cause table, no figure
+    older = summarize(spec, table.drop([f"planned_lost_{c}" for c in CAUSES]))["points"]
+    assert [p["lost_by_cause"] for p in older] == [[], []]
+    assert cause_rows({"points": older}) == [] and figs.causes_png({"points": older}) is None
+    png = figs.causes_png({"confidence": 0.95, "points": points})
+    assert png is not None and Image.open(io.BytesIO(png)).size[0] > 400
 
 
 def test_the_plan_against_its_runs_is_drawn_only_where_the_plan_says_something() -> None:

@@ -24,6 +24,7 @@ from scipy.stats import t
 
 from swarm.cli import main
 from swarm.errors import InputError
+from swarm.sim.hazards import CAUSES
 from swarm.studies import backends
 from swarm.studies.runner import run_seed
 from swarm.studies.stats import k_out_of_n, wilson_interval
@@ -763,13 +764,23 @@ def test_each_point_carries_its_plan_s_expected_losses(tmp_path) -> None:
     for p, point in enumerate(summary["points"]):
         params = point["params"]
         rows = [cols["planned_lost"][i] for i in range(table.num_rows) if cols["point"][i] == p]
+        mine = [i for i in range(table.num_rows) if cols["point"][i] == p]
+        by_cause = [[cols[f"planned_lost_{c}"][i] for c in CAUSES] for i in mine]
         if not params["hazards.enabled"]:
             assert rows == [None, None] and point["planned_lost"] is None
+            assert by_cause == [[None] * len(CAUSES)] * 2 and point["lost_by_cause"] == []
             continue
         m = load_mission(path, params)
-        expected = plan_mission(m, seed=m.seed, workers=1).budget["expected_lost"]
+        plan = plan_mission(m, seed=m.seed, workers=1)
+        expected = plan.budget["expected_lost"]
         assert rows == [pytest.approx(expected)] * 2
         assert point["planned_lost"] == pytest.approx(expected)
+        # the causes' parts add up to the total, each the plan's own over its phases
+        assert [sum(r) for r in by_cause] == [pytest.approx(expected)] * 2
+        failures = sum(c.get("failure", 0.0) for c in plan.budget["expected_losses"].values())
+        assert by_cause[0][CAUSES.index("failure")] == pytest.approx(failures)
+        planned = {c["cause"]: c["planned"] for c in point["lost_by_cause"]}
+        assert set(planned) >= {c for c in CAUSES if by_cause[0][CAUSES.index(c)] > 0}
     # landing has no search: no plan's detection to set beside the runs'
     assert cols["planned_detection"] == [None] * table.num_rows
 
