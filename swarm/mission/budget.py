@@ -30,12 +30,14 @@ rates the simulator draws from (`swarm.sim.hazards`):
   found the mine while the robot can still keep off it x trigger_probability, the metres counted
   where mines can still be unfound (robots steer clear of those found): on a search lane, the share
   the lanes swept before it have not found (`found_by_lanes_before`); on a trip to mark a mine,
-  after the search, the share it missed. Inverse cube: exp(-W^2 / (16 pi d^2)) for a mine dead
-  ahead, not yet found by the time the robot is at d. A find is reported at the end of a
-  simulator step, and from the next the robot turns away in place (the side-step lies abreast),
-  running on only `run_on_m`; so d is the last end of a step from which the robot still keeps
-  off: the trigger radius + the run-on + up to one step's travel (`REACTION_S`, averaged over
-  where the steps end); a tabulated curve: 1 - p averaged over offsets within the trigger radius;
+  after the search, the share it missed. Inverse cube: the miss exp(-W^2 / (8 pi) / (h (h + x)))
+  of a mine at offset y within the trigger radius of the track, looked at from afar until the
+  robot is x short of abreast of it (h = sqrt(x^2 + y^2); W^2 / (16 pi x^2) dead ahead), averaged
+  over y. A find is reported at the end of a simulator step, and from the next the robot turns
+  away in place (the side-step lies abreast: `turn_away_path`), so x is the last end of a step
+  from which the turn keeps it off the mine: up to one step's travel (`REACTION_S`, averaged over
+  where the steps end) beyond the least; a tabulated curve: 1 - p averaged over offsets within
+  the trigger radius;
 - radio dropout: 1 - exp(-rate x t).
 
 Causes combine as independent competing risks: P(lost) = 1 - prod(1 - p_cause). A robot still
@@ -112,8 +114,8 @@ BAND_REACH_LANES = 3
 TRIGGER_RADIUS_M = 0.25
 #: The simulator's hidden-rock contact radius (`swarm.sim.hazards.ROCK_CONTACT_M`, m).
 ROCK_CONTACT_M = 0.25
-#: The simulator's step (`swarm.sim.env.SimConfig.dt_s`, s): the scripted policy steers clear of a
-#: mine the step after its sensor finds it, so a robot closing on a mine drives one step further.
+#: The simulator's step (`swarm.sim.env.SimConfig.dt_s`, s): a find is heard at the end of a step,
+#: and the scripted policy steers clear of it from the next.
 REACTION_S = 0.5
 #: The simulator's physics substep (`SimConfig.substep_s`, s).
 SUBSTEP_S = 0.25
