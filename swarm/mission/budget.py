@@ -310,6 +310,8 @@ def turn_away_path(mission: Mission, speed_mps: float, ground: str | None = None
     0.06 m on average, report to nearest approach, mines off their track's line closing less.)"""
     lib = mission.terrain_library
     land = [name for name in lib if not lib[name].is_water]
+    if not land:  # no ground to drive on: told anywhere, the robot is where it was told
+        return np.zeros((1, 2))
     mode = lib[ground if ground is not None and ground in land else land[0]]
     coef = tuple((name, float(value[0])) for name, value in coeffs_for(mode).items())
     robot = mission.robot_params
