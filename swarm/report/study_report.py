@@ -353,7 +353,7 @@ def cause_rows(summary: dict) -> list[list[str]]:
         return []
     by_point = [{c["cause"]: c for c in p["lost_by_cause"]} for p in points]
     causes = figs.ordered_causes({c for found in by_point for c in found})
-    if len(points) == 1:
+    if len(summary.get("points") or []) == 1:  # a sweep names its points, even where one has no plan
         head = ["runs: lost per run", "plan's expectation"]
     else:
         head = [f"{point_label(p.get('params', {}))}: {what}" for p in points for what in ("runs", "plan")]

@@ -566,6 +566,10 @@ def test_each_cause_s_losses_are_held_against_the_plan_s(tmp_path) -> None:
     assert by_cause["mine"][2:] == ["0.00", "0.00"]
     one = cause_rows({"points": points[:1]})
     assert one[0] == ["cause", "runs: lost per run", "plan's expectation"]
+    # a sweep's point without a plan by cause (hazards off there) leaves the others named
+    off = {**points[1], "lost_by_cause": []}
+    named = ["cause", "swarm.count = 12: runs", "swarm.count = 12: plan"]
+    assert cause_rows({"points": [points[0], off]})[0] == named
     # a table from before the plan's losses by cause: no cause table, no figure
     older = summarize(spec, table.drop([f"planned_lost_{c}" for c in CAUSES]))["points"]
     assert [p["lost_by_cause"] for p in older] == [[], []]
