@@ -295,24 +295,31 @@ def agreement_png(summary: dict) -> bytes | None:
     return png_bytes(fig)
 
 
+def causes_by_point(summary: dict) -> tuple[list[dict], list[str], list[list[dict]]]:
+    """The points whose plan gives its losses by cause (`summarize`'s `lost_by_cause`), the causes
+    any of them has (in `CAUSES` order), and each point's entry for each cause: its runs' mean and
+    interval and the plan's value (0 lost, none planned, where the point has no entry)."""
+    points = [p for p in summary.get("points") or [] if p.get("lost_by_cause")]
+    found = [{c["cause"]: c for c in p["lost_by_cause"]} for p in points]
+    causes = ordered_causes({c for entries in found for c in entries})
+    none = {"mean": 0.0, "interval": None, "planned": 0.0}
+    return points, causes, [[entries.get(c, none) for c in causes] for entries in found]
+
+
 def causes_png(summary: dict) -> bytes | None:
     """Robots lost a run to each cause against the plan's expectation: per cause, each point's runs'
-    mean with its interval (`summarize`'s `lost_by_cause`) and the plan's value as a hollow marker
-    around it, as `agreement_png` draws them; None when no point's plan gives its losses by cause."""
-    points = [p for p in summary.get("points") or [] if p.get("lost_by_cause")]
+    mean with its interval (`causes_by_point`) and the plan's value as a hollow marker around it,
+    as `agreement_png` draws them; None when no point's plan gives its losses by cause."""
+    points, causes, entries = causes_by_point(summary)
     if not points:
         return None
-    by_point = [{c["cause"]: c for c in p["lost_by_cause"]} for p in points]
-    causes = ordered_causes({c for found in by_point for c in found})
     fig, ax = new_figure(max(5.5, min(1.1 * len(causes) + 0.25 * len(causes) * len(points) + 2.0, 14.0)), 3.8,
                          layout="constrained")  # fmt: skip
     x = np.arange(len(causes), dtype=float)
     step = 0.8 / max(len(points), 1)
-    for i, (point, found) in enumerate(zip(points, by_point, strict=True)):
+    for i, (point, rows) in enumerate(zip(points, entries, strict=True)):
         colour, marker, _ = SERIES_STYLES[i % len(SERIES_STYLES)]
         at = x - 0.4 + step * (i + 0.5)
-        empty = {"mean": 0.0, "interval": None, "planned": 0.0}
-        rows = [found.get(c, empty) for c in causes]
         mean = np.array([r["mean"] for r in rows], dtype=float)
         bounds = np.array([r["interval"] or [r["mean"], r["mean"]] for r in rows], dtype=float)
         name = short_label(point.get("params", {})) if len(points) > 1 else ""

@@ -345,23 +345,21 @@ def loss_rows(summary: dict) -> list[list[str]]:
 
 def cause_rows(summary: dict) -> list[list[str]]:
     """Each cause's robots lost a run against the plan's expectation, a pair of columns a point
-    (`summarize`'s `lost_by_cause`): the runs' mean with its interval's half-width, the plan's
-    value with its verdict; a cause in a row where any point's runs lost a robot to it or its plan
-    expects some. Empty when no point's plan gives its losses by cause."""
-    points = [p for p in summary.get("points") or [] if p.get("lost_by_cause")]
+    (`figs.causes_by_point`): the runs' mean with its interval's half-width, the plan's value with
+    its verdict; a cause in a row where any point's runs lost a robot to it or its plan expects
+    some. Empty when no point's plan gives its losses by cause."""
+    points, causes, entries = figs.causes_by_point(summary)
     if not points:
         return []
-    by_point = [{c["cause"]: c for c in p["lost_by_cause"]} for p in points]
-    causes = figs.ordered_causes({c for found in by_point for c in found})
     if len(summary.get("points") or []) == 1:  # a sweep names its points, even where one has no plan
         head = ["runs: lost per run", "plan's expectation"]
     else:
         head = [f"{point_label(p.get('params', {}))}: {what}" for p in points for what in ("runs", "plan")]
     rows = [["cause", *head]]
-    for cause in causes:
+    for j, cause in enumerate(causes):
         cells = []
-        for found in by_point:
-            c = found.get(cause, {"mean": 0.0, "interval": None, "planned": 0.0})
+        for point_entries in entries:
+            c = point_entries[j]
             cells += [
                 _mean_cell(c["mean"], c["interval"], ".2f"),
                 _plan_cell(c["planned"], c["interval"], ".2f", more_is_better=False),

@@ -286,20 +286,20 @@ def _by_cause(
     """Of a point's runs `rows`, each cause's robots lost a run (mean and `_count_interval`) and
     the plan's expectation, for the causes the runs lost robots to or the plan expects any from;
     empty where the table has no plan's expectation by cause (no hazards, or an older table)."""
-    if not len(rows) or all(_first_of(planned_to[c], rows) is None for c in CAUSES):
+    planned = {c: _first_of(planned_to[c], rows) for c in CAUSES}
+    if not len(rows) or all(v is None for v in planned.values()):
         return []
     most = max((robots[i] for i in rows), default=0)
     out = []
     for c in CAUSES:
         counts = [lost_to[c][i] or 0 for i in rows]
-        planned = _first_of(planned_to[c], rows)
-        if any(counts) or (planned or 0.0) > 0.0:
+        if any(counts) or (planned[c] or 0.0) > 0.0:
             out.append(
                 {
                     "cause": c,
                     "mean": float(np.mean(counts)),
                     "interval": _count_interval(counts, confidence, most),
-                    "planned": planned,
+                    "planned": planned[c],
                 }
             )
     return out
