@@ -682,6 +682,14 @@ def expected_markers(mines: float, p: float, lasting: np.ndarray, *, poisson: bo
     return float(np.sum(found_sf * at_least_lasting))
 
 
+def expected_fewer(chances_a: np.ndarray, chances_b: np.ndarray) -> float:
+    """E[min(A, B)] of two independent counts, each of independent events with their own chances
+    (Poisson binomials): sum over k >= 1 of P(A >= k) P(B >= k), as `expected_markers`."""
+    tails = [poisson_binomial_pmf(c)[::-1].cumsum()[::-1][1:] for c in (chances_a, chances_b)]
+    k = min(len(t) for t in tails)
+    return float(np.sum(tails[0][:k] * tails[1][:k]))
+
+
 def poisson_binomial_pmf(chances: np.ndarray) -> np.ndarray:
     """P(exactly k of independent events with probabilities `chances` happen), k = 0 .. len."""
     pmf = np.ones(1)

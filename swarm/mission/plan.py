@@ -30,6 +30,7 @@ plan, and `write_plan` the same bytes.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import json
 import math
 from collections.abc import Callable, Sequence
@@ -988,9 +989,17 @@ def _budget(mission: Mission, plan: MissionPlan) -> dict:
         way_out = exposure.WayOut(mission, cm, pickup_points(mission, launches))
     ways = exposure.ways_in(mission, cm, driven.robots, zone, ashore, mine_area, by_task)
     seen = _routes_detection(mission, plan, mine_area)
+    back_from = None
+    if way_out is not None:  # on routes of their own: the plan's other ways back stay as they were
+        back_from = functools.partial(
+            exposure.way_back, mission, cm, way_out=way_out, router=router.fork(), zone=zone
+        )
+    takeovers = exposure.station_takeovers(mission, cm, driven, ways, router, mine_area, back_from)
     done: dict[str, tuple[float, float]] = {}
     for _ in range(BUDGET_PASSES):
-        out, now = _budget_pass(mission, plan, driven, ways, way_out, router, zone, mine_area, seen, done)
+        out, now = _budget_pass(
+            mission, plan, driven, ways, takeovers, way_out, router, zone, mine_area, seen, done
+        )
         moved = [np.abs(np.subtract(shares, done.get(t, (1.0, 1.0)))).max() for t, shares in now.items()]
         if max(moved, default=0.0) <= DONE_TOLERANCE:
             break
@@ -1027,6 +1036,7 @@ def _budget_pass(
     plan: MissionPlan,
     driven: MissionPlan,
     ways: list[exposure.WayIn],
+    takeovers: exposure.Takeovers,
     way_out: exposure.WayOut | None,
     router: Router,
     zone: SurfZone,
@@ -1057,8 +1067,10 @@ def _budget_pass(
     unseen_blasts = 0.0  # mines expected to go off before any sensor found them
     holders: list[float] = []  # the relay and spare robots' shares of the window ashore
     extra, trips_m = exposure.off_plan_driving(mission, cm, driven, ways, done)
-    for rp, way, more in zip(driven.robots, ways, extra, strict=True):
-        exposed = more.added_to(way.exposure)
+    for rp, way, more, taking, stations in zip(
+        driven.robots, ways, extra, takeovers.driving, takeovers.returns, strict=True
+    ):
+        exposed = more.plus(taking).added_to(way.exposure)
         losses = budget.robot_losses(mission, cm, exposed)
         # what a study counts: every loss until beach operations end, not only the task's window
         until_end = max(mission.beach_end_s - way.ashore_s, 0.0)
@@ -1071,8 +1083,11 @@ def _budget_pass(
         if back.enabled:
             returning += still
             home = exposure.way_back(mission, cm, way.last_m, way_out, router, zone)
-            for cause, p in budget.return_losses(mission, cm, home).items():
-                way_back[cause] = way_back.get(cause, 0.0) + still * p
+            # from its own spot, or from the stations it has taken over
+            held = sum(chance for chance, _ in stations)
+            for chance, start in [(1.0 - held, home), *stations]:
+                for cause, p in budget.return_losses(mission, cm, start).items():
+                    way_back[cause] = way_back.get(cause, 0.0) + still * chance * p
         unseen_blasts += expected["beach"].get("mine", 0.0) * budget.unseen_share(
             mission, exposed.speed_mps, budget.main_ground(mission, exposed)
         )

@@ -740,3 +740,106 @@ def test_the_trips_search_at_random_only_what_a_robot_can_reach() -> None:
     assert budget.with_trips(0.9, 0.95, w, 0.0, area) == 0.9
     assert budget.with_trips(0.96, 0.95, w, length, area) == 0.96  # the tracks already reach further
     assert budget.with_trips(0.9, 0.95, w, 1e9, area) == pytest.approx(0.95)
+
+
+def test_the_smaller_of_two_random_counts_is_its_drawn_mean() -> None:
+    """The stations the spares take over: E[min(open, spares ashore)], both Poisson binomials.
+    Checked against 400,000 drawn runs, and two closed forms: one event each gives p q; a side
+    that surely has r gives sum_{k=1..r} P(A >= k)."""
+    rng = np.random.default_rng(5)
+    a, b = rng.uniform(0.1, 0.6, 8), rng.uniform(0.5, 0.95, 8)
+    draws = 400_000
+    drawn = np.minimum((rng.random((draws, 8)) < a).sum(axis=1), (rng.random((draws, 8)) < b).sum(axis=1))
+    got = budget.expected_fewer(a, b)
+    assert got == pytest.approx(drawn.mean(), abs=4.0 * drawn.std() / math.sqrt(draws))
+    assert got < min(a.sum(), b.sum())
+    assert budget.expected_fewer([0.3], [0.7]) == pytest.approx(0.21, rel=1e-12)
+    tail = budget.poisson_binomial_pmf(a)[::-1].cumsum()[::-1]
+    assert budget.expected_fewer(a, np.ones(3)) == pytest.approx(tail[1:4].sum(), rel=1e-12)
+    assert budget.expected_fewer(a, []) == 0.0
+
+
+RELAY = "missions/relay.yaml"
+
+
+def _takeovers(overrides: dict | None = None):
+    """relay's plan, and its spares' drives to lost robots' stations (`station_takeovers`)."""
+    from swarm.mission.plan import pickup_points, plan_mission
+    from swarm.planning.router import Router
+
+    m = load_mission(RELAY, overrides or {})
+    plan = plan_mission(m, seed=m.seed, workers=1)
+    cm = plan.costmap
+    zone = SurfZone(m, cm)
+    ashore = exposure.nearest_ashore(m, cm, zone.heights > 0)
+    ways = exposure.ways_in(m, cm, plan.robots, zone, ashore, None, {})
+    router = Router(cm, seed=m.seed)
+    way_out = exposure.WayOut(m, cm, pickup_points(m, np.array([rp.launch_m for rp in plan.robots])))
+
+    def back_from(start):
+        return exposure.way_back(m, cm, start, way_out, router.fork(), zone)
+
+    return m, plan, exposure.station_takeovers(m, cm, plan, ways, router, None, back_from)
+
+
+@pytest.mark.slow
+def test_spares_drive_to_the_stations_of_lost_robots_and_back_from_there() -> None:
+    """relay's spares take the lost relays' places: only spares drive there, more when robots fail
+    more often, none with the hazards off; a spare goes back to sea from a station with the chance
+    it holds one (at most once), each station's in proportion to the drives there."""
+    _, plan, base = _takeovers()
+    _, _, worse = _takeovers({"hazards.attrition.mtbf_h": 2.5})
+    _, _, calm = _takeovers({"hazards.enabled": False})
+    roles = [rp.role for rp in plan.robots]
+    assert "spare" in roles and "relay" in roles
+
+    def metres(t) -> float:
+        return sum(sum(d.metres.values()) for d in t.driving)
+
+    assert 0 < metres(base) < metres(worse)
+    assert 0 < base.expected < worse.expected <= roles.count("spare") * 1.5
+    assert metres(calm) == 0 and calm.expected == 0 and not any(calm.returns)
+    for role, d, back in zip(roles, base.driving, base.returns, strict=True):
+        if role != "spare":
+            assert not d.metres and not back
+            continue
+        held = sum(chance for chance, _ in back)
+        assert 0 < held <= 1
+        assert len(back) == roles.count("relay")
+
+
+@pytest.mark.slow
+def test_the_plan_s_station_takeovers_are_the_simulator_s() -> None:
+    """The takeovers the plan counts are those the scripted policy makes: relay, 32 runs of its
+    plan, takeover events against `Takeovers.expected` within four standard errors (3.7 expected;
+    48 runs gave 3.8)."""
+    from swarm.sim.run import simulate_batch
+
+    m, plan, takeovers = _takeovers()
+    logs = simulate_batch(m, list(range(300, 332)), plan=plan)
+    counts = np.array(
+        [sum(e["kind"] == "takeover" and e["item"] == "route" for e in log.events) for log in logs]
+    )
+    assert takeovers.expected == pytest.approx(
+        counts.mean(), abs=4.0 * counts.std(ddof=1) / math.sqrt(len(counts))
+    )
+
+
+@pytest.mark.slow
+def test_the_budget_counts_the_spares_drives_to_the_stations() -> None:
+    """relay's plan counts its spares getting stuck on the way to the lost relays' stations and on
+    the way back from them (0.08 robots a run without, against 0.14 its runs' hazard integrates)."""
+    from swarm.mission import plan as planning
+
+    m = load_mission(RELAY)
+    with_them = planning.plan_mission(m, seed=m.seed, workers=1).budget["expected_losses"]
+    with pytest.MonkeyPatch.context() as mp:
+
+        def none(mission, cm, plan, ways, *args, **kw):
+            return exposure.Takeovers([exposure.OffPlan({}, 0.0, 0.0, 0.0)] * len(ways), [[]] * len(ways))
+
+        mp.setattr(exposure, "station_takeovers", none)
+        without = planning.plan_mission(m, seed=m.seed, workers=1).budget["expected_losses"]
+    for phase in ("beach", "return"):
+        assert with_them[phase]["immobilized"] > without[phase]["immobilized"] + 0.01
+    assert with_them["surf"] == without["surf"] and with_them["sea"] == without["sea"]
