@@ -1253,6 +1253,8 @@ def _budget_pass(
         "expected_lost": total,
         "expected_expended": markers,
         "expected_recovered": recovered,
+        # lost robots' stations the spares take over a run (`exposure.station_takeovers`)
+        "station_takeovers": takeovers.expected,
         "search": searches,
         # the robots whose way in is still among the breakers when the surf crossing's time limit
         # runs out at every phase of the wave: this plan cannot land them (`surf_drive`)

@@ -99,6 +99,7 @@ def _losses(d: dict) -> dict | None:
         "expended": b.get("expected_expended"),
         "recovered": b.get("expected_recovered"),
         "stranded": b.get("stranded_in_surf") or [],
+        "takeovers": b.get("station_takeovers"),
     }
 
 
@@ -390,6 +391,10 @@ def summary_table(data: dict) -> list[list[str]]:
                     "current sets them along the beach while they swim",
                 ]
             )
+        if losses.get("takeovers"):
+            taken, spares = losses["takeovers"], s["roles"].get("spare", 0)
+            text = f"{taken:.1f} lost robots' stations taken over a run by the {spares} spares"
+            rows.append(["spares at work", text])
         ends = []
         if losses.get("expended") and losses["expended"][1] > 0:
             ends.append(f"{robots_range(losses['expended'])} expended marking mines for the clearance")

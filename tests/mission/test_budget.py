@@ -832,14 +832,17 @@ def test_the_budget_counts_the_spares_drives_to_the_stations() -> None:
     from swarm.mission import plan as planning
 
     m = load_mission(RELAY)
-    with_them = planning.plan_mission(m, seed=m.seed, workers=1).budget["expected_losses"]
+    counted = planning.plan_mission(m, seed=m.seed, workers=1).budget
+    with_them = counted["expected_losses"]
     with pytest.MonkeyPatch.context() as mp:
 
         def none(mission, cm, plan, ways, *args, **kw):
             return exposure.Takeovers([exposure.OffPlan({}, 0.0, 0.0, 0.0)] * len(ways), [[]] * len(ways))
 
         mp.setattr(exposure, "station_takeovers", none)
-        without = planning.plan_mission(m, seed=m.seed, workers=1).budget["expected_losses"]
+        left_out = planning.plan_mission(m, seed=m.seed, workers=1).budget
+    without = left_out["expected_losses"]
+    assert counted["station_takeovers"] > 3.0 and left_out["station_takeovers"] == 0.0
     for phase in ("beach", "return"):
         assert with_them[phase]["immobilized"] > without[phase]["immobilized"] + 0.01
     assert with_them["surf"] == without["surf"] and with_them["sea"] == without["sea"]

@@ -112,6 +112,21 @@ def test_the_plan_checks_the_fewest_robots_it_expects_back_against_min_robots_re
         assert all("back at sea" not in c["criterion"] for c in plan_data(d)["verdict"].get("checks", []))
 
 
+def test_the_summary_says_how_many_stations_the_spares_take_over() -> None:
+    """The spares' takeovers the budget counts (`exposure.station_takeovers`), with the spares
+    there are; none said for a plan without any, or from before the plan counted them."""
+    from swarm.report.plan_report import plan_data, summary_table
+
+    d = _plan_json(None, 0)
+    d["summary"] = {"robots": 16, "roles": {"relay": 8, "spare": 8}}
+    d["budget"]["station_takeovers"] = 3.624
+    rows = dict(map(tuple, summary_table(plan_data(d))))
+    assert rows["spares at work"] == "3.6 lost robots' stations taken over a run by the 8 spares"
+    for takeovers in (0.0, None):
+        d["budget"]["station_takeovers"] = takeovers
+        assert "spares at work" not in dict(map(tuple, summary_table(plan_data(d))))
+
+
 def test_the_table_says_whether_the_plan_agrees_with_its_runs() -> None:
     """The runs' interval of each mean beside the plan's expectation and its verdict: 4.2 expected
     lost lies inside 3.1 to 5.9 (agrees); 99% expected found lies above 92% to 96% (optimistic)."""
