@@ -231,6 +231,14 @@ class MissionPlan:
         return out
 
     @property
+    def expected_takeovers(self) -> float | None:
+        """Lost robots' stations the plan expects its spares to take over a run (`budget`,
+        `exposure.station_takeovers`); None with the hazards off, or from a plan before it."""
+        if self.expected_lost is None or self.budget.get("station_takeovers") is None:
+            return None
+        return float(self.budget["station_takeovers"])
+
+    @property
     def expected_detection(self) -> float | None:
         """The share of the mines the plan expects found after its losses (`budget`), over every
         search weighted by its expected mines (each search's own where none is expected), as a

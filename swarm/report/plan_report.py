@@ -621,6 +621,14 @@ def evaluation_table(
             for c in by_cause
         )
         rows.append(["lost per run by cause: simulated / planned", pairs])
+    taken = ev.get("takeovers_mean")
+    planned_taken = None if expected is None else expected.get("takeovers")
+    if (taken or 0) > 0 or (planned_taken or 0) > 0:
+        text = _num(taken, ".2f")
+        if planned_taken is not None:
+            interval = ev.get("takeovers_interval")
+            text += against_plan(planned_taken, interval, ".2f", ev["confidence"], more_is_better=False)
+        rows.append(["stations taken over per run: simulated against planned", text])
     for key, label in (
         ("expended", "robots expended in the clearance per run"),
         ("recovered", "robots back at sea per run"),

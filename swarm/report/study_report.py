@@ -221,8 +221,9 @@ def study_rows(summary: dict) -> list[list[str]]:
     """One row per parameter point: its swept values, runs, successes, success rate, Wilson interval,
     whether the interval's lower bound reaches the target, median time to success, mean robots lost
     and the plan's expected losses, the mean share of the mines found and the plan's where a point
-    has a search, the mean mines cleared and robots back at sea where any point has some, and the
-    runs a ±0.05 interval would need."""
+    has a search, the mean mines cleared and robots back at sea where any point has some, the
+    stations the spares took over a run and the plan's where any point has some, and the runs a
+    ±0.05 interval would need."""
     keys = swept_keys(summary)
     found = [
         title
@@ -237,6 +238,11 @@ def study_rows(summary: dict) -> list[list[str]]:
         )
         if any((_number(p.get(key)) or 0) > 0 for p in summary.get("points") or [])
     ]
+    # the spares' takeovers of lost robots' stations, where a point's runs or plan have any
+    takeovers = any(
+        (_number(p.get("takeovers_mean")) or 0) > 0 or (_number(p.get("planned_takeovers")) or 0) > 0
+        for p in summary.get("points") or []
+    )
     confidence = summary.get("confidence", 0.95)
     target = _number(summary.get("target"))
     chances = _gives_chances(summary)
@@ -257,6 +263,7 @@ def study_rows(summary: dict) -> list[list[str]]:
             "plan's expected losses",
             *found,
             *(title for _, title in ends),
+            *(["stations taken over", "plan's takeovers"] if takeovers else []),
             f"runs for ±{WIDTH:g}",
             *(["infeasible"] if why else []),
         ]
@@ -290,11 +297,22 @@ def study_rows(summary: dict) -> list[list[str]]:
                     else []
                 ),
                 *(_fmt(p.get(key), ".2f") for key, _ in ends),
+                *(_takeover_cells(p) if takeovers else []),
                 MISSING if needed is None else f"{needed:.0f}",
                 *([p.get("infeasible") or ""] if why else []),
             ]
         )
     return rows
+
+
+def _takeover_cells(point: dict) -> list[str]:
+    """The stations a point's runs took over a run (mean ± half-width) and the plan's, with where
+    it lies (optimistic when the plan expects the spares to take fewer)."""
+    interval = point.get("takeovers_interval")
+    return [
+        _mean_cell(point.get("takeovers_mean"), interval, ".2f"),
+        _plan_cell(point.get("planned_takeovers"), interval, ".2f", more_is_better=False),
+    ]
 
 
 def pooled_losses_by_cause(summary: dict) -> dict[str, int]:

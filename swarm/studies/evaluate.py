@@ -120,6 +120,9 @@ def evaluate_plan(
         "losses_by_cause": point["losses_by_cause"],
         # each cause's robots lost a run with its interval, beside the plan's (`summarize`)
         "lost_by_cause": point.get("lost_by_cause") or [],
+        # lost robots' stations the spares took over a run, with its interval (`summarize`)
+        "takeovers_mean": point.get("takeovers_mean"),
+        "takeovers_interval": point.get("takeovers_interval"),
         "losses_by_phase": point["losses_by_phase"],
         "seeds": cols["seed"],
         "folder": str(folder / "plan"),

@@ -142,6 +142,7 @@ def run_batch(tasks: list[RunTask], working: Callable[[float], None] | None = No
 
 def _row(task: RunTask, mission, plan, log, runtime_s: float) -> dict:
     """One run's row of the results table."""
+    from swarm.mission.exposure import STATION_ROLES
     from swarm.mission.plan import success_chance
 
     row: dict = {"point": task.point, "run": task.run, "seed": task.seed}
@@ -163,6 +164,10 @@ def _row(task: RunTask, mission, plan, log, runtime_s: float) -> dict:
         row[f"planned_lost_{c}"] = None if by_cause is None else by_cause.get(c, 0.0)
     row["planned_detection"] = plan.expected_detection
     row["planned_success"] = success_chance(mission, plan)
+    row["takeovers"] = sum(
+        e["kind"] == "takeover" and e["item"] == "route" and e["role"] in STATION_ROLES for e in log.events
+    )
+    row["planned_takeovers"] = plan.expected_takeovers
     summary = log.summary()
     row.update({c: int(summary[c]) for c in MINE_COUNTS})
     row.update({c: int(summary["end_states"].get(c, 0)) for c in END_COUNTS})

@@ -27,6 +27,10 @@ Columns, in order:
 - ``planned_success`` (float64): the point's plan's chance that a run meets every criterion
   (`swarm.mission.plan.success_chance`), to set beside ``success``; null where the plan gives no
   chance for some criterion a run is judged by, and in tables written before it existed.
+- ``takeovers`` (int32): lost robots' stations a spare took over (the policy's ``takeover`` events
+  of a landing, relay, surveillance or beacon robot's point); null in tables written before it
+  existed. ``planned_takeovers`` (float64): the point's plan's (`MissionPlan.expected_takeovers`),
+  to set beside it; null with the hazards off, and in tables written before it existed.
 - ``mines``, ``mines_detected``, ``mines_cleared`` (int32): mines laid, found by a sensor, and set
   off by the synchronized clearance (each by the robot marking it); null in tables written before
   they existed.
@@ -93,6 +97,7 @@ def schema(sweep_types: Sequence[tuple[str, pa.DataType]]) -> pa.Schema:
     fields += [pa.field(f"planned_lost_{c}", pa.float64()) for c in CAUSES]
     fields += [pa.field("planned_detection", pa.float64())]
     fields += [pa.field("planned_success", pa.float64())]
+    fields += [pa.field("takeovers", pa.int32()), pa.field("planned_takeovers", pa.float64())]
     fields += [pa.field(c, pa.int32()) for c in OUTCOME_COUNTS]
     fields += [
         pa.field("losses", pa.list_(LOSS)),

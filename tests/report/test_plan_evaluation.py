@@ -127,6 +127,22 @@ def test_the_summary_says_how_many_stations_the_spares_take_over() -> None:
         assert "spares at work" not in dict(map(tuple, summary_table(plan_data(d))))
 
 
+def test_the_evaluation_sets_the_stations_taken_over_beside_the_plan_s() -> None:
+    """`swarm plan --evaluate`: the runs' station takeovers a run against the plan's, with the
+    interval and its verdict; no row where neither has any."""
+    plan = {"hazards": True, "total": 7.2, "by_phase": {}, "takeovers": 3.62}
+    ev = {**_evaluation(), "takeovers_mean": 4.25, "takeovers_interval": [3.56, 4.94]}
+    rows = dict(map(tuple, evaluation_table(ev, plan)))
+    assert rows["stations taken over per run: simulated against planned"] == (
+        "4.25 (95% interval 3.56 to 4.94; plan 3.62: agrees)"
+    )
+    late = dict(map(tuple, evaluation_table({**ev, "takeovers_interval": [3.8, 4.7]}, plan)))
+    assert late["stations taken over per run: simulated against planned"].endswith("plan 3.62: optimistic)")
+    none = {**_evaluation(), "takeovers_mean": 0.0, "takeovers_interval": None}
+    key = "stations taken over per run: simulated against planned"
+    assert key not in dict(map(tuple, evaluation_table(none, {**plan, "takeovers": None})))
+
+
 def test_the_table_says_whether_the_plan_agrees_with_its_runs() -> None:
     """The runs' interval of each mean beside the plan's expectation and its verdict: 4.2 expected
     lost lies inside 3.1 to 5.9 (agrees); 99% expected found lies above 92% to 96% (optimistic)."""

@@ -14,6 +14,7 @@ import numpy as np
 import pyarrow as pa
 import pytest
 from PIL import Image
+from scipy import stats
 
 from swarm.report import study_figures as figs
 from swarm.report.study_report import (
@@ -432,6 +433,39 @@ def test_the_points_say_the_mines_cleared_and_the_robots_back_where_a_mission_ha
         {"points": [{**p, "mines_cleared_mean": 0.0, "recovered_mean": None} for p in points]}
     )[0]
     assert "mean mines cleared" not in header and "mean back at sea" not in header
+
+
+def test_the_points_set_the_stations_taken_over_beside_the_plan_s() -> None:
+    """The summary's per-point mean of the table's station takeovers with its interval (Garwood's
+    where every run took as many), the plan's beside it with its verdict; no columns where no point
+    has any, nor from a table written before they were counted."""
+    from swarm.studies.study import StudySpec, summarize
+    from swarm.studies.sweep import parse_sweeps
+
+    spec = StudySpec(str(ROOT / "missions" / "relay.yaml"), 3, parse_sweeps(["swarm.count=12,16"]), seed=1)
+    base = {"success": [True] * 6, "losses": [[]] * 6, "completed_s": [1.0] * 6}
+    table = pa.table(
+        {
+            "point": pa.array([0, 0, 0, 1, 1, 1], pa.int32()),
+            "run": pa.array([0, 1, 2, 0, 1, 2], pa.int32()),
+            **base,
+            "takeovers": pa.array([2, 4, 3, 5, 5, 5], pa.int32()),
+            "planned_takeovers": pa.array([3.2] * 3 + [1.0] * 3, pa.float64()),
+        }
+    )
+    points = summarize(spec, table)["points"]
+    t = stats.t.ppf(0.975, 2) * 1.0 / math.sqrt(3)  # the first point's sd is 1
+    assert points[0]["takeovers_mean"] == 3.0
+    assert points[0]["takeovers_interval"] == pytest.approx([3.0 - t, 3.0 + t])
+    # every run took 5: Garwood's interval of 15 over 3 runs
+    low, high = stats.chi2.ppf(0.025, 30) / 6, stats.chi2.ppf(0.975, 32) / 6
+    assert points[1]["takeovers_interval"] == pytest.approx([low, high])
+    rows = study_rows({"points": points})
+    assert column(rows, "plan's takeovers") == ["3.20 (agrees)", "1.00 (optimistic)"]
+    assert column(rows, "stations taken over")[0].startswith("3.00 ± ")
+    older = summarize(spec, pa.table({"point": table["point"], "run": table["run"], **base}))["points"]
+    assert older[0]["takeovers_mean"] is None and older[0]["planned_takeovers"] is None
+    assert "stations taken over" not in study_rows({"points": older})[0]
 
 
 def test_the_points_set_the_mines_found_beside_the_plan_s_expectation() -> None:

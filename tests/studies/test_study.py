@@ -783,6 +783,33 @@ def test_each_point_carries_its_plan_s_expected_losses(tmp_path) -> None:
         assert set(planned) >= {c for c in CAUSES if by_cause[0][CAUSES.index(c)] > 0}
     # landing has no search: no plan's detection to set beside the runs'
     assert cols["planned_detection"] == [None] * table.num_rows
+    # its spares take a lost landing robot's zone: the plan's takeovers beside the runs'
+    for p, point in enumerate(summary["points"]):
+        mine = [i for i in range(table.num_rows) if cols["point"][i] == p]
+        planned = [cols["planned_takeovers"][i] for i in mine]
+        if not point["params"]["hazards.enabled"]:
+            assert planned == [None, None] and point["planned_takeovers"] is None
+        else:
+            m = load_mission(path, point["params"])
+            expected = plan_mission(m, seed=m.seed, workers=1).expected_takeovers
+            assert planned == [pytest.approx(expected)] * 2 and expected > 0
+        assert point["takeovers_mean"] == pytest.approx(np.mean([cols["takeovers"][i] for i in mine]))
+
+
+def test_a_row_counts_the_stations_its_spares_took_over(tmp_path) -> None:
+    """relay: a lost relay's place goes to a spare, at most one place each, each after a loss of
+    a robot holding one (the relay, or a spare that had taken it); beside it, the plan's."""
+    from swarm.mission.load import load_mission
+    from swarm.mission.plan import plan_mission
+    from swarm.studies.runner import RunTask, run_task
+
+    path = REPO / "missions" / "relay.yaml"
+    row = run_task(RunTask(str(path), 0, 0, (), 3))
+    ashore = [x for x in row["losses"] if x["phase"] != "returning"]
+    assert 1 <= row["takeovers"] <= min(8, len(ashore))
+    m = load_mission(path)
+    planned = plan_mission(m, seed=m.seed, workers=1).expected_takeovers
+    assert row["planned_takeovers"] == pytest.approx(planned)
 
 
 def test_a_held_key_is_no_sweep_and_the_answer_says_what_was_held(tiny, tmp_path, capsys) -> None:
