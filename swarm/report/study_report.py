@@ -197,6 +197,14 @@ def _gives_chances(summary: dict) -> bool:
     return any(_number(p.get("planned_success")) is not None for p in summary.get("points") or [])
 
 
+def _has_takeovers(summary: dict) -> bool:
+    """Whether some point's runs or plan have the spares take over lost robots' stations."""
+    return any(
+        (_number(p.get("takeovers_mean")) or 0) > 0 or (_number(p.get("planned_takeovers")) or 0) > 0
+        for p in summary.get("points") or []
+    )
+
+
 def _wilson(point: dict) -> list | None:
     """A point's Wilson interval of its success rate, as `_plan_cell` takes an interval."""
     low, high = _number(point.get("wilson_low")), _number(point.get("wilson_high"))
@@ -208,6 +216,8 @@ def points_note(summary: dict) -> str:
     confidence = summary.get("confidence", 0.95)
     chances = _gives_chances(summary)
     success = "; its P(success) against the runs' Wilson interval alike" if chances else ""
+    if _has_takeovers(summary):
+        success += "; the stations taken over as the robots lost (optimistic when it expects fewer)"
     return (
         f"A mean's ± is the half-width of its {percent(confidence)} t interval over the point's runs. "
         "The plan's expectation agrees when it lies inside that interval; outside it, it is optimistic "
@@ -238,11 +248,7 @@ def study_rows(summary: dict) -> list[list[str]]:
         )
         if any((_number(p.get(key)) or 0) > 0 for p in summary.get("points") or [])
     ]
-    # the spares' takeovers of lost robots' stations, where a point's runs or plan have any
-    takeovers = any(
-        (_number(p.get("takeovers_mean")) or 0) > 0 or (_number(p.get("planned_takeovers")) or 0) > 0
-        for p in summary.get("points") or []
-    )
+    takeovers = _has_takeovers(summary)
     confidence = summary.get("confidence", 0.95)
     target = _number(summary.get("target"))
     chances = _gives_chances(summary)

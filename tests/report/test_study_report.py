@@ -466,6 +466,8 @@ def test_the_points_set_the_stations_taken_over_beside_the_plan_s() -> None:
     older = summarize(spec, pa.table({"point": table["point"], "run": table["run"], **base}))["points"]
     assert older[0]["takeovers_mean"] is None and older[0]["planned_takeovers"] is None
     assert "stations taken over" not in study_rows({"points": older})[0]
+    assert "stations taken over as the robots lost" in points_note({"points": points})
+    assert "stations taken over" not in points_note({"points": older})
 
 
 def test_the_points_set_the_mines_found_beside_the_plan_s_expectation() -> None:
