@@ -673,11 +673,10 @@ def expected_markers(mines: float, p: float, lasting: np.ndarray, *, poisson: bo
     lasting, `lasting`. Independent, so E[min(X, Y)] = sum over k >= 1 of P(X >= k) P(Y >= k): below
     min(E[X], E[Y]) wherever either can fall short of the other (Jensen)."""
     p = min(max(p, 0.0), 1.0)
-    pmf = poisson_binomial_pmf(lasting)
-    k = np.arange(1, len(pmf))
+    at_least_lasting = poisson_binomial_tail(lasting)  # P(Y >= k), k = 1 .. robots
+    k = np.arange(1, len(at_least_lasting) + 1)
     if not len(k):
         return 0.0
-    at_least_lasting = pmf[::-1].cumsum()[::-1][1:]  # P(Y >= k), k = 1 .. robots
     found_sf = stats.poisson.sf(k - 1, mines * p) if poisson else binom.sf(k - 1, round(mines), p)
     return float(np.sum(found_sf * at_least_lasting))
 
@@ -685,7 +684,7 @@ def expected_markers(mines: float, p: float, lasting: np.ndarray, *, poisson: bo
 def expected_fewer(chances_a: np.ndarray, chances_b: np.ndarray) -> float:
     """E[min(A, B)] of two independent counts, each of independent events with their own chances
     (Poisson binomials): sum over k >= 1 of P(A >= k) P(B >= k), as `expected_markers`."""
-    tails = [poisson_binomial_pmf(c)[::-1].cumsum()[::-1][1:] for c in (chances_a, chances_b)]
+    tails = [poisson_binomial_tail(c) for c in (chances_a, chances_b)]
     k = min(len(t) for t in tails)
     return float(np.sum(tails[0][:k] * tails[1][:k]))
 
@@ -696,6 +695,11 @@ def poisson_binomial_pmf(chances: np.ndarray) -> np.ndarray:
     for q in np.clip(np.asarray(chances, np.float64), 0.0, 1.0):
         pmf = np.convolve(pmf, [1.0 - q, q])
     return pmf
+
+
+def poisson_binomial_tail(chances: np.ndarray) -> np.ndarray:
+    """P(at least k of independent events with probabilities `chances` happen), k = 1 .. len."""
+    return poisson_binomial_pmf(chances)[::-1].cumsum()[::-1][1:]
 
 
 def p_at_least(chances: np.ndarray, k: int) -> float:

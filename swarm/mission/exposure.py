@@ -202,6 +202,15 @@ def surf_terms(drive: surf_drive.WayIn, period_s: float) -> tuple[float, float, 
     return seconds, per_hit, timeout
 
 
+def losses_to_the_end(
+    mission: Mission, cm: CostMap, way: WayIn, exposed: budget.Exposure
+) -> dict[str, dict[str, float]]:
+    """`exposed`'s losses with its time ashore running from `way`'s landing to the end of beach
+    operations, not only its task's window: every loss a study counts."""
+    until_end = max(mission.beach_end_s - way.ashore_s, 0.0)
+    return budget.robot_losses(mission, cm, dataclasses.replace(exposed, beach_s=until_end))
+
+
 def way_in(
     mission: Mission,
     cm: CostMap,
@@ -385,10 +394,7 @@ def station_takeovers(
     stations = [k for k, rp in enumerate(plan.robots) if rp.role in STATION_ROLES]
     if not spares or not stations or not budget.hazards_enabled(mission):
         return none
-    whole = {}  # every loss until beach operations end, as a study counts them
-    for k in (*stations, *spares):
-        until_end = max(mission.beach_end_s - ways[k].ashore_s, 0.0)
-        whole[k] = budget.robot_losses(mission, cm, dataclasses.replace(ways[k].exposure, beach_s=until_end))
+    whole = {k: losses_to_the_end(mission, cm, ways[k], ways[k].exposure) for k in (*stations, *spares)}
     afloat = ("sea", "surf")
     phases = {k: afloat if plan.robots[k].role == "landing" else budget.PHASE_NAMES for k in stations}
     opened = np.array([budget.lost_probability(whole[k], phases[k]) for k in stations])
@@ -415,12 +421,10 @@ def station_takeovers(
     held = sum(chance for chance, _ in returns)
     if held > 1.0:  # a spare goes back to sea once, from the last station it held
         returns = [(chance / held, home) for chance, home in returns]
-    out = list(none.driving)
-    back = [list(r) for r in none.returns]
-    for j in spares:
-        out[j] = OffPlan(metres, inside, 0.0, 0.0)
-        back[j] = returns
-    return Takeovers(out, back, float(per_station.sum()))
+    taker = set(spares)
+    driving = [OffPlan(metres, inside, 0.0, 0.0) if k in taker else d for k, d in enumerate(none.driving)]
+    back = [returns if k in taker else [] for k in range(n)]
+    return Takeovers(driving, back, float(per_station.sum()))
 
 
 def off_plan_driving(

@@ -1080,9 +1080,7 @@ def _budget_pass(
     ):
         exposed = more.plus(taking).added_to(way.exposure)
         losses = budget.robot_losses(mission, cm, exposed)
-        # what a study counts: every loss until beach operations end, not only the task's window
-        until_end = max(mission.beach_end_s - way.ashore_s, 0.0)
-        whole = budget.robot_losses(mission, cm, dataclasses.replace(exposed, beach_s=until_end))
+        whole = exposure.losses_to_the_end(mission, cm, way, exposed)
         expected = budget.expected_by_cause(whole)
         for phase, causes in expected.items():
             for cause, p in causes.items():

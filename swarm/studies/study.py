@@ -254,7 +254,10 @@ def summarize(spec: StudySpec, table: pa.Table) -> dict:
                 "detection_interval": _interval_of([found[i] for i in mine], spec.confidence, (0.0, 1.0)),
                 "planned_detection": _first_of(planned_found, mine),
                 # lost robots' stations the spares took over a run, against the plan's
-                **_takeovers([takeovers[i] for i in mine], spec.confidence),
+                "takeovers_mean": _mean_of([takeovers[i] for i in mine]),
+                "takeovers_interval": _count_interval(
+                    [takeovers[i] for i in mine if takeovers[i] is not None], spec.confidence, 0
+                ),
                 "planned_takeovers": _first_of(planned_takeovers, mine),
                 # how the mission ended besides its losses: mines the clearance set off, robots
                 # picked up at sea (None from tables written before they were counted)
@@ -333,19 +336,6 @@ def _count_interval(counts: list[int], confidence: float, robots: int) -> list[f
     """`stats.count_mean_interval` of robots lost a run, at most the robots launched, as JSON."""
     interval = stats.count_mean_interval(counts, confidence, (0.0, float(robots) if robots else math.inf))
     return None if interval is None else list(interval)
-
-
-def _takeovers(counts: list, confidence: float) -> dict:
-    """The stations taken over a run: mean and `stats.count_mean_interval`; None from tables
-    written before they were counted."""
-    there = [v for v in counts if v is not None]
-    if not there:
-        return {"takeovers_mean": None, "takeovers_interval": None}
-    interval = stats.count_mean_interval(there, confidence, (0.0, math.inf))
-    return {
-        "takeovers_mean": float(np.mean(there)),
-        "takeovers_interval": None if interval is None else list(interval),
-    }
 
 
 def _runs_for(rate: float, half_width: float, confidence: float, n: int) -> int | None:
