@@ -21,6 +21,7 @@ from scipy.spatial import cKDTree
 
 from swarm.robot.driving import to_body
 from swarm.sim.layout import ELEVATION_CLIP_M, ROLES, ObservationLayout
+from swarm.sim.pair_kernels import nearest_others
 from swarm.sim.physics_kernels import cell_index, cell_index_inside
 from swarm.sim.runview import FOLLOW, RETURN
 from swarm.sim.setup import MissionSetup
@@ -29,7 +30,7 @@ from swarm.sim.setup import MissionSetup
 #: than building and querying a k-d tree).
 DENSE_NEAREST_PAIRS = 2_000_000
 #: Up to this many robots on the map, a run's neighbour table comes from every pair (fewer
-#: steps than building a k-d tree, and no Python call per run's robots).
+#: steps than a grid search).
 BRUTE_NEAREST_ROBOTS = 256
 
 
@@ -108,20 +109,6 @@ class Observer:
         return out.reshape(r, n, lay.size)
 
     # neighbours ---------------------------------------------------------------------------------------
-    def _refresh_many(self, run, b: int, on: np.ndarray) -> None:
-        """Run b's neighbour table from a k-d tree (`_refresh_stale`; runs with many robots on the
-        map) and which of its links work."""
-        live = np.flatnonzero(on)
-        k = self.layout.neighbours
-        table = np.full((self.n, k), -1, dtype=np.intp)
-        q = min(k + 1, len(live))
-        if q >= 2:
-            xy = run.robot_state[live, :2]
-            _, idx = cKDTree(xy, balanced_tree=False, compact_nodes=False).query(xy, k=q)
-            table[live, : q - 1] = live[idx[:, 1:]]  # the first is itself
-        self._tables[b] = table
-        _linked_slots(run.links.indptr, run.links.indices, table, self._linked[b])
-
     def _refresh_stale(self, world, runs: list[int], here: np.ndarray) -> None:
         """Refresh the neighbour tables of the runs whose radio updated or where a robot arrived on
         the map since their table was made. `here` (len(runs), n): on the map now.
@@ -137,19 +124,13 @@ class Observer:
         stale = np.flatnonzero((versions != self._table_version[runs]) | arrived)
         if not len(stale):
             return
-        few = np.count_nonzero(here[stale], axis=1) <= BRUTE_NEAREST_ROBOTS
-        for j in stale[~few].tolist():
-            self._refresh_many(world.runs[runs[j]], runs[j], here[j])
         run_ids = np.asarray(runs, dtype=np.intp)
-        if few.any():  # every pair, all these runs in one pass
-            js = stale[few]
-            picked = run_ids[js]
-            links = [world.runs[b].links for b in picked.tolist()]
-            indptr = np.stack([x.indptr for x in links])
-            starts = np.concatenate(([0], np.cumsum(indptr[:, -1], dtype=np.int64)))
-            indices = np.concatenate([x.indices for x in links])
-            tables, linked = self._tables, self._linked
-            _refresh_few(world.robot_state, picked, here[js], indptr, indices, starts, tables, linked)
+        picked = run_ids[stale]  # every stale run in one pass
+        links = [world.runs[b].links for b in picked.tolist()]
+        indptr = np.stack([x.indptr for x in links])
+        starts = np.concatenate(([0], np.cumsum(indptr[:, -1], dtype=np.int64)))
+        indices = np.concatenate([x.indices for x in links])
+        _refresh(world.robot_state, picked, here[stale], indptr, indices, starts, self._tables, self._linked)
         self._table_version[run_ids[stale]], self._table_on[run_ids[stale]] = versions[stale], here[stale]
 
     def _observe_objects(self, world, runs: list[int], block: np.ndarray) -> None:
@@ -314,14 +295,23 @@ def _nearest(xy, live, k, table):
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _refresh_few(state, runs, here, indptr, indices, starts, tables, linked):
-    """The neighbour tables of runs `runs` (few robots each: every pair looked at), `here[r]` run
-    r's robots on the map, its links' CSR `indptr[r]` and `indices[starts[r]:starts[r + 1]]`."""
+def _refresh(state, runs, here, indptr, indices, starts, tables, linked):
+    """The neighbour tables of runs `runs`, `here[r]` run r's robots on the map, its links' CSR
+    `indptr[r]` and `indices[starts[r]:starts[r + 1]]`: every pair looked at in a run of few
+    robots, a grid search in one of many (the same neighbours in the same order)."""
     k = tables.shape[2]
     for r in range(runs.shape[0]):
         b = runs[r]
         tables[b] = -1
-        _nearest(state[b], np.flatnonzero(here[r]), k, tables[b])
+        live = np.flatnonzero(here[r])
+        if live.shape[0] <= BRUTE_NEAREST_ROBOTS:
+            _nearest(state[b], live, k, tables[b])
+        else:
+            near = nearest_others(state[b, live, 0].copy(), state[b, live, 1].copy(), k)
+            for a in range(live.shape[0]):
+                for slot in range(k):
+                    if near[a, slot] >= 0:
+                        tables[b, live[a], slot] = live[near[a, slot]]
         _linked_slots(indptr[r], indices[starts[r] : starts[r + 1]], tables[b], linked[b])
 
 

@@ -63,7 +63,7 @@ def table_candidates(
         idx = np.flatnonzero(live[r])
         px = xy[r, idx, 0].copy()
         py = xy[r, idx, 1].copy()
-        nbr = _nearest(px, py, k, r2_rr)
+        nbr = _nearest(px, py, k, r2_rr, False)
         if len(nbr) != len(idx):
             tie[r] = True
             continue
@@ -75,24 +75,33 @@ def table_candidates(
     return keys[:m], tie
 
 
+@numba.njit(cache=True, inline="always")
+def _after(d_a: float, j_a: int, d_b: float, j_b: int, by_index: bool) -> bool:
+    """Whether point j_a at squared distance d_a comes after point j_b at d_b: farther, or (if
+    `by_index`) as far with a higher index."""
+    return d_a > d_b or (by_index and d_a == d_b and j_a > j_b)
+
+
 @numba.njit(cache=True)
-def _nearest(px: np.ndarray, py: np.ndarray, k: int, r2: float) -> np.ndarray:
+def _nearest(px: np.ndarray, py: np.ndarray, k: int, r2: float, others: bool) -> np.ndarray:
     """(L, k) each point's k nearest points (itself included) with squared distance < r2, -1
-    where fewer; empty (0, k) if some point's k-th and (k+1)-th nearest tie. A grid search: cells
-    hold a few points each, and rings of cells are visited outwards until no unvisited point can
-    come closer than the (k+1)-th found or than the range."""
+    where fewer; empty (0, k) if some point's k-th and (k+1)-th nearest tie. With `others`, each
+    point's k nearest other points instead, equal distances to the lower index, nearest first
+    (never empty). A grid search: cells hold a few points each, and rings of cells are visited
+    outwards until no unvisited point can come closer than the last one kept or than the range."""
     count = len(px)
     x0, y0 = px.min(), py.min()
     w, h = px.max() - x0, py.max() - y0
-    cell, nx, ny, cx, cy = _grid(px - x0, py - y0, w, h)
+    # a few rings' worth of points for a table of k: fewer, larger cells for a long table
+    cell, nx, ny, cx, cy = _grid(px - x0, py - y0, w, h, max(_CELL_ROBOTS, k / 4.0))
     slack = 1e-9 * (abs(x0) + abs(y0) + w + h + cell)  # rounding of the cells' edges
     start, members = _bin(cx * ny + cy, nx * ny)
     # the points in cell order: a cell's points lie together in memory, and neighbours follow
     # each other through the search
     px, py, cx, cy = px[members], py[members], cx[members], cy[members]
-    kept = k + 1  # one more than needed, to see a tie at the table's edge
-    best_d = np.empty(kept)  # a max-heap
-    best_j = np.empty(kept, np.int64)
+    kept = k if others else k + 1  # one more than needed, to see a tie at the table's edge
+    best_d = np.empty(kept)  # a max-heap by distance, then index
+    best_j = np.empty(kept, np.int64)  # the points' own indices
     out = np.full((count, k), -1, np.int64)
     for i in range(count):
         found = 0
@@ -105,9 +114,11 @@ def _nearest(px: np.ndarray, py: np.ndarray, k: int, r2: float) -> np.ndarray:
                         continue
                     c = gx * ny + gy
                     for j in range(start[c], start[c + 1]):
+                        if others and j == i:
+                            continue
                         dx = px[j] - px[i]
                         dy = py[j] - py[i]
-                        found = _keep(dx * dx + dy * dy, j, r2, best_d, best_j, found)
+                        found = _keep(dx * dx + dy * dy, members[j], r2, best_d, best_j, found, others)
             q += 1
             # the least distance from point i to a cell outside the rings visited so far
             bound = math.inf
@@ -124,23 +135,42 @@ def _nearest(px: np.ndarray, py: np.ndarray, k: int, r2: float) -> np.ndarray:
             bound = max(bound - slack, 0.0)
             if bound * bound >= r2 or (found == kept and bound * bound > best_d[0]):
                 break
+        if others:  # the heap, nearest first
+            for s in range(found - 1, 0, -1):
+                d_last, j_last = best_d[s], best_j[s]
+                out[members[i], s] = best_j[0]
+                _sift_down(best_d, best_j, s, d_last, j_last, others)
+            if found:
+                out[members[i], 0] = best_j[0]
+            continue
         if found == kept:  # drop the farthest; a tie if the next farthest is as far
             farthest = best_d[0]
-            _sift_down(best_d, best_j, k, best_d[k], best_j[k])
+            _sift_down(best_d, best_j, k, best_d[k], best_j[k], others)
             if best_d[0] == farthest:
                 return np.empty((0, k), np.int64)
             found = k
-        out[members[i], :found] = members[best_j[:found]]
+        out[members[i], :found] = best_j[:found]
     return out
 
 
 @numba.njit(cache=True)
-def _grid(x: np.ndarray, y: np.ndarray, w: float, h: float) -> tuple[float, int, int, np.ndarray, np.ndarray]:
+def nearest_others(px: np.ndarray, py: np.ndarray, k: int) -> np.ndarray:
+    """(L, k) each point's k nearest other points, nearest first, equal distances to the lower
+    index, -1 where fewer: the order of comparing every pair (`_nearest` with `others`)."""
+    if len(px) == 0:
+        return np.full((0, k), -1, np.int64)
+    return _nearest(px, py, k, math.inf, True)
+
+
+@numba.njit(cache=True)
+def _grid(
+    x: np.ndarray, y: np.ndarray, w: float, h: float, per_cell: float
+) -> tuple[float, int, int, np.ndarray, np.ndarray]:
     """Square cells over the box [0, w] x [0, h] of the points (x, y): their side, the cells
-    along x and y, and each point's cell. Sized for a few points a cell on average, then made
+    along x and y, and each point's cell. Sized for `per_cell` points a cell on average, then made
     smaller while the points crowd into few cells (a swarm in clusters), within a cell budget."""
     count = len(x)
-    cell = max(math.sqrt(w * h * _CELL_ROBOTS / count), max(w, h) / _MAX_CELLS, 1e-9)
+    cell = max(math.sqrt(w * h * per_cell / count), max(w, h) / _MAX_CELLS, 1e-9)
     while True:
         nx, ny = int(w / cell) + 1, int(h / cell) + 1
         cx = np.minimum(x / cell, nx - 1).astype(np.int64)
@@ -148,45 +178,49 @@ def _grid(x: np.ndarray, y: np.ndarray, w: float, h: float) -> tuple[float, int,
         crowd = np.bincount(cx * ny + cy)
         # the robots a robot shares its cell with, on average over the robots
         shared = np.sum(crowd * crowd) / count
-        smaller = cell * math.sqrt(_CELL_ROBOTS / shared)
-        if shared <= 2.0 * _CELL_ROBOTS or (w / smaller + 1.0) * (h / smaller + 1.0) > _MAX_GRID * count:
+        smaller = cell * math.sqrt(per_cell / shared)
+        if shared <= 2.0 * per_cell or (w / smaller + 1.0) * (h / smaller + 1.0) > _MAX_GRID * count:
             return cell, nx, ny, cx, cy
         cell = smaller
 
 
 @numba.njit(cache=True)
-def _keep(d2: float, j: int, r2: float, heap_d: np.ndarray, heap_j: np.ndarray, found: int) -> int:
+def _keep(
+    d2: float, j: int, r2: float, heap_d: np.ndarray, heap_j: np.ndarray, found: int, by_index: bool
+) -> int:
     """Offer point j at squared distance d2 to the max-heap of the nearest points found so far
-    (full at len(heap_d)): taken if in range and nearer than the farthest kept, which it then
+    (full at len(heap_d)): taken if in range and before the last kept (`after`), which it then
     replaces. Returns the heap's size."""
     if not d2 < r2:
         return found
     if found < len(heap_d):  # not full: sift up from the end
         at = found
-        while at > 0 and heap_d[(at - 1) >> 1] < d2:
+        while at > 0 and _after(d2, j, heap_d[(at - 1) >> 1], heap_j[(at - 1) >> 1], by_index):
             heap_d[at] = heap_d[(at - 1) >> 1]
             heap_j[at] = heap_j[(at - 1) >> 1]
             at = (at - 1) >> 1
         heap_d[at] = d2
         heap_j[at] = j
         return found + 1
-    if not d2 < heap_d[0]:
+    if not _after(heap_d[0], heap_j[0], d2, j, by_index):
         return found
-    _sift_down(heap_d, heap_j, found, d2, j)
+    _sift_down(heap_d, heap_j, found, d2, j, by_index)
     return found
 
 
 @numba.njit(cache=True)
-def _sift_down(heap_d: np.ndarray, heap_j: np.ndarray, size: int, d2: float, j: int) -> None:
+def _sift_down(heap_d: np.ndarray, heap_j: np.ndarray, size: int, d2: float, j: int, by_index: bool) -> None:
     """Put (d2, j) at the root of the max-heap of `size` entries and sift it down."""
     at = 0
     while True:
         child = 2 * at + 1
         if child >= size:
             break
-        if child + 1 < size and heap_d[child + 1] > heap_d[child]:
+        if child + 1 < size and _after(
+            heap_d[child + 1], heap_j[child + 1], heap_d[child], heap_j[child], by_index
+        ):
             child += 1
-        if not heap_d[child] > d2:
+        if not _after(heap_d[child], heap_j[child], d2, j, by_index):
             break
         heap_d[at] = heap_d[child]
         heap_j[at] = heap_j[child]

@@ -31,11 +31,12 @@ def _kd_tree_keys(
     return np.sort(np.concatenate([keys, idx[row].astype(np.int64) * big_n + col + n]))
 
 
+@pytest.mark.parametrize("k", [9, 33])  # a short table, and the radios' (32 and the robot itself)
 @pytest.mark.parametrize("n", [120, 300])  # the pairs read off a pair matrix (up to 256), or row by row
 @pytest.mark.parametrize("layout", ["uniform", "clusters", "line"])
-def test_table_candidates_are_the_k_d_trees(layout: str, n: int) -> None:
+def test_table_candidates_are_the_k_d_trees(layout: str, n: int, k: int) -> None:
     rng = np.random.default_rng(5)
-    runs, k = 4, 9
+    runs = 4
     if layout == "uniform":
         xy = rng.uniform(0, 200, size=(runs, n, 2))
     elif layout == "clusters":  # a swarm just off its launch points, as in a benchmark
@@ -66,6 +67,30 @@ def test_a_tie_at_a_tables_edge_is_left_to_the_k_d_tree() -> None:
     keys, tie = pair_kernels.table_candidates(both, lives, np.arange(2), no_fixed, no_keys, 5, 1e4, 0.0, 12)
     np.testing.assert_array_equal(tie, [True, False])
     np.testing.assert_array_equal(keys, 144 + _kd_tree_keys(spread[0], live[0], no_fixed, 5, 100.0, 0.0))
+
+
+@pytest.mark.parametrize("layout", ["uniform", "stacks", "line", "lattice"])
+def test_nearest_others_is_a_stable_sort_of_every_distance(layout: str) -> None:
+    """The observation's neighbour table in runs of many robots: each point's k nearest others,
+    nearest first and equal distances to the lower index, as a stable argsort of every squared
+    distance orders them; stacked and lattice points make many ties, at the table's edge too."""
+    rng = np.random.default_rng(8)
+    n, k = 700, 4
+    if layout == "uniform":
+        xy = rng.uniform(0, 300, (n, 2))
+    elif layout == "stacks":  # robots launched from a few spots
+        xy = np.repeat(rng.uniform(0, 100, (35, 2)), 20, axis=0)
+    elif layout == "line":  # a swarm strung along a beach
+        xy = np.column_stack([rng.uniform(0, 900, n), rng.uniform(100, 120, n)])
+    else:
+        xy = rng.integers(0, 12, (n, 2)).astype(float)
+    got = pair_kernels.nearest_others(xy[:, 0].copy(), xy[:, 1].copy(), k)
+    dx, dy = xy[None, :, 0] - xy[:, None, 0], xy[None, :, 1] - xy[:, None, 1]
+    d2 = dx * dx + dy * dy
+    np.fill_diagonal(d2, np.inf)
+    np.testing.assert_array_equal(got, np.argsort(d2, axis=1, kind="stable")[:, :k])
+    few = pair_kernels.nearest_others(xy[:3, 0].copy(), xy[:3, 1].copy(), k)
+    assert (few[:, 2:] == -1).all() and (np.sort(few[:, :2], axis=1) >= 0).all()
 
 
 def test_link_csr_components_and_hops_are_scipys() -> None:
