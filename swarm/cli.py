@@ -57,6 +57,13 @@ def _parser() -> argparse.ArgumentParser:
             "--ssv", action=action, type=_path, help="simulation export (.ssv) instead of encoders+truth"
         )
         p.add_argument("--counter-bits", type=int, help="encoder counter width, to unwrap counter overflow")
+        p.add_argument(
+            "--truth-offset",
+            metavar="S|auto",
+            help="when each --truth's first sample was taken on its encoder log's clock (s; negative: "
+            "before the log began), or auto to estimate it from the speeds; default: the logs start "
+            "together, with a warning where the speeds say otherwise",
+        )
         p.add_argument("--model", choices=("skid", "kinematic", "lagrangian"), default="skid")
         p.add_argument("--terrain", type=_path, help="terrain-mode YAML overriding or adding to the defaults")
         p.add_argument(
@@ -332,8 +339,52 @@ def _runs(args: argparse.Namespace, robot) -> list:
         raise InputError(
             "command line", "--encoders", "nothing", "--encoders E.txt --truth T.txt, or --ssv S.ssv"
         )
-    runs = [load_encoder_run(robot, e, t, args.counter_bits) for e, t in zip(encoders, truths, strict=True)]
+    offset = _truth_offset(args.truth_offset)
+    runs = []
+    for e, t in zip(encoders, truths, strict=True):
+        run = load_encoder_run(robot, e, t, args.counter_bits)
+        runs.append(_offset_run(run, offset, robot, t, e))
     return runs + [load_ssv_run(s) for s in ssvs]
+
+
+def _truth_offset(text: str | None) -> float | str | None:
+    """--truth-offset: seconds, "auto", or None (not given)."""
+    if text is None or text == "auto":
+        return text
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not math.isfinite(value):
+        raise InputError("command line", "--truth-offset", text, "seconds (a number) or auto")
+    return value
+
+
+def _offset_run(run, offset: float | str | None, robot, truth: Path, encoders: Path):
+    """`run` on one clock: its reference shifted by the offset given, the estimated one with
+    "auto", and as it is without one (a warning where the speeds put the reference's start
+    `runs.TRUTH_OFFSET_WARN_S` or more off the encoder log's)."""
+    from swarm.robot.runs import TRUTH_OFFSET_WARN_S, truth_offset_s, with_truth_offset
+
+    if isinstance(offset, float):
+        return with_truth_offset(run, offset)
+    estimate = truth_offset_s(run, robot)
+    if offset == "auto":
+        said = (
+            f"taken as starting {estimate:+.2f} s into {encoders}"
+            if estimate
+            else f"no shift explains the motion clearly better: taken to start with {encoders}"
+        )
+        print(f"note: {truth}: {said} (--truth-offset auto)", file=sys.stderr)
+        return with_truth_offset(run, estimate)
+    if abs(estimate) >= TRUTH_OFFSET_WARN_S:
+        print(
+            f"warning: {truth}: its motion matches {encoders}'s best with its first sample {estimate:+.2f} s "
+            "into the log, but the logs are taken to start together (--truth-offset S or auto if they "
+            "did not)",
+            file=sys.stderr,
+        )
+    return run
 
 
 def _table(rows: Sequence[Sequence[str]]) -> str:

@@ -264,9 +264,21 @@ def _step_without_the_skid_model(tmp_path: Path) -> tuple[list[object], list[str
     return args, ["--fixed-step", "--model kinematic", "with the skid model"]
 
 
+def _truth_offset_not_a_number(tmp_path: Path) -> tuple[list[object], list[str]]:
+    return [*run_args("concrete_straight"), "--truth-offset", "soon"], ["--truth-offset", "'soon'", "or auto"]
+
+
+def _truth_offset_past_the_log(tmp_path: Path) -> tuple[list[object], list[str]]:
+    """Shifted by more than the run lasts, the two logs share no time: nothing to score."""
+    args = [*run_args("concrete_straight"), "--truth-offset", "-9"]
+    return args, [str(truth("concrete_straight")), "truth offset", "-9 s", "logs overlap"]
+
+
 @pytest.mark.parametrize(
     "case",
     [
+        _truth_offset_not_a_number,
+        _truth_offset_past_the_log,
         _step_without_the_skid_model,
         _truth_in_millimetres,
         _missing_encoders,
@@ -297,6 +309,33 @@ def test_bad_input_is_one_line_and_exit_2(tmp_path, case: Callable):
         assert text in lines[0], (text, lines[0])
     assert result.stdout == ""
     assert sorted(tmp_path.iterdir()) == before  # no figure, nothing half-written
+
+
+def test_a_reference_started_late_is_warned_about_and_aligned_with_auto(tmp_path):
+    """A motion-capture log started 0.5 s after the encoder log: by default one warning naming it
+    and the offset its speeds give (the logs are still taken to start together); with
+    --truth-offset auto (or the offset in seconds) it scores as the run recorded together. A run
+    recorded together gets no warning."""
+    late = tmp_path / "late_truth.txt"
+    rows = np.loadtxt(truth("concrete_straight"))
+    rows = rows[rows[:, 0] >= 0.5]
+    rows[:, 0] -= rows[0, 0]
+    np.savetxt(late, rows, fmt="%.4f")
+    terrain = ROOT / "swarm" / "data" / "terrain" / "skid4-concrete.yaml"
+    args = ["model", "validate", "--robot", ROBOT, "--encoders", encoders("concrete_straight"), "--json"]
+    args += ["--terrain", terrain]
+    together = swarm(*args, "--truth", truth("concrete_straight"))
+    assert together.returncode == 0 and together.stderr == "", together.stderr
+    plain = swarm(*args, "--truth", late)
+    warnings = [line for line in plain.stderr.splitlines() if line.startswith("warning:")]
+    assert plain.returncode == 0 and len(warnings) == 1, plain.stderr
+    assert str(late) in warnings[0] and "+0.49 s" in warnings[0] and "--truth-offset" in warnings[0]
+    want = json.loads(together.stdout)["path_rmse_pct"]
+    assert json.loads(plain.stdout)["path_rmse_pct"] > want + 5.0
+    for offset in ("auto", "0.5"):
+        aligned = swarm(*args, "--truth", late, "--truth-offset", offset)
+        assert aligned.returncode == 0 and "warning" not in aligned.stderr, aligned.stderr
+        assert json.loads(aligned.stdout)["path_rmse_pct"] == pytest.approx(want, abs=0.2)
 
 
 def test_argparse_errors_exit_2_without_traceback():
