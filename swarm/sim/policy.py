@@ -253,6 +253,8 @@ class ScriptedPolicy:
                 if not len(rest):
                     continue  # driven to its end: done
                 it.start_m, it.waypoints_m = rest[0].copy(), rest
+            elif it.role == "landing" and not env.score.zone_still_open(it.start_m):
+                continue  # its zone has held its robots: done, as for the zone's own robots
             it.taken_by, it.audience, reopened = -1, audience.copy(), True
         k = int(env.marking[i])
         if k >= 0:

@@ -178,6 +178,29 @@ def test_a_landing_zone_that_has_held_its_robots_is_not_taken_over(tmp_path) -> 
     assert env.outcome()["criteria"]["landing"]["value"] == 1.0
 
 
+@pytest.mark.slow
+def test_a_landing_zone_taker_lost_after_the_zone_has_held_leaves_nothing_open(tmp_path) -> None:
+    """The spare that took a lost lander's zone becomes a lander: lost once the zone has held its
+    robots, it opens nothing, as the zone's own robots do (full_conops: 0.16 landing zones a run
+    were taken over again this way, 0.69 takeovers of landing zones against 0.50 landers lost)."""
+    path = write_mission(tmp_path, swarm={"count": 4}, hazards=QUIET)
+    env = SwarmEnv(load_mission(path), action_mode="command")
+    policy = ScriptedPolicy(env)
+    env.reset(seed=0)
+    lander = next(r for r in env.plan.robots if r.role == "landing")
+    _run(env, policy, 60.0)
+    env.lose(lander.id)
+    while env.agents and not env.score.zone_reached.all():
+        policy.update()
+        env.advance({})
+    taken = [ev for ev in env.events if ev["kind"] == "takeover" and ev["role"] == "landing"]
+    assert len(taken) == 1 and env.score.zone_reached.all()
+    env.lose(taken[0]["robot"])
+    _run(env, policy, env.time_limit_s + 1)
+    assert [ev for ev in env.events if ev["kind"] == "takeover" and ev["role"] == "landing"] == taken
+    assert env.outcome()["criteria"]["landing"]["value"] == 1.0
+
+
 def test_a_lost_searchers_track_is_finished_by_a_spare(tmp_path) -> None:
     env, policy = _searcher_and_spare(tmp_path)
     searcher = next(r for r in env.plan.robots if r.role == "search")
