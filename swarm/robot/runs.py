@@ -95,14 +95,15 @@ TRUTH_OFFSET_WARN_S = 0.25
 
 def truth_offset_s(run: Run, robot: RobotParams) -> float:
     """When the pose reference's first sample was taken on the encoder log's clock (s; negative:
-    before the encoder log began), from the motion both logs record: the shift, in steps of
-    `TRUTH_OFFSET_STEP_S` within `TRUTH_OFFSET_REACH_S`, at which the reference's speed and turn
-    rate are best explained by the wheels' (each as a multiple of the wheels' own: slip and skid
-    scale them, they do not shift them; the turn as the speed it gives the sides, so that a
-    straight's turn, all noise, weighs next to nothing), over an overlap of at least half the
-    reference. 0 unless
-    that shift leaves at most `TRUTH_OFFSET_CLEAR` of what no shift leaves unexplained, and lies
-    inside the search: a run of steady speed and turn says little about its clock.
+    before the encoder log began), from the motion both logs record.
+
+    It is the shift, in steps of `TRUTH_OFFSET_STEP_S` within `TRUTH_OFFSET_REACH_S`, at which
+    the reference's speed and turn rate are best explained by the wheels', over an overlap of at
+    least half the reference. Each is taken as a multiple of the wheels' own (slip and skid scale
+    them, they do not shift them), and the turn as the speed it gives the sides, so that a
+    straight's turn, all noise, weighs next to nothing. The answer is 0 unless that shift leaves
+    at most `TRUTH_OFFSET_CLEAR` of what no shift leaves unexplained and lies inside the search:
+    a run of steady speed and turn says little about its clock.
 
     Both logs start at 0 (the thesis's convention, `Run`); a motion-capture log started half a
     second after the robot's makes every prediction start from the wrong pose at the wrong time
