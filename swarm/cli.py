@@ -61,8 +61,8 @@ def _parser() -> argparse.ArgumentParser:
             "--truth-offset",
             metavar="S|auto",
             help="when each --truth's first sample was taken on its encoder log's clock (s; negative: "
-            "before the log began), or auto to estimate it from the speeds; default: the logs start "
-            "together, with a warning where the speeds say otherwise",
+            "before the log began), or auto to estimate it from the motion; default: the logs start "
+            "together, with a warning where the motion says otherwise",
         )
         p.add_argument("--model", choices=("skid", "kinematic", "lagrangian"), default="skid")
         p.add_argument("--terrain", type=_path, help="terrain-mode YAML overriding or adding to the defaults")
@@ -362,7 +362,7 @@ def _truth_offset(text: str | None) -> float | str | None:
 
 def _offset_run(run, offset: float | str | None, robot, truth: Path, encoders: Path):
     """`run` on one clock: its reference shifted by the offset given, the estimated one with
-    "auto", and as it is without one (a warning where the speeds put the reference's start
+    "auto", and as it is without one (a warning where the motion puts the reference's start
     `runs.TRUTH_OFFSET_WARN_S` or more off the encoder log's)."""
     from swarm.robot.runs import TRUTH_OFFSET_WARN_S, truth_offset_s, with_truth_offset
 

@@ -75,7 +75,6 @@ MARK_SLACK_S = 600.0
 #: stand-by sent from anywhere is in place before the end.
 STAND_BY_LEAD_S = 1800.0
 SPARE, SEARCH, RELAY_ROLE = ROLES.index("spare"), ROLES.index("search"), ROLES.index("relay")
-LANDING = ROLES.index("landing")
 STATIONS = tuple(ROLES.index(r) for r in ("landing", "relay", "surveillance", "beacon"))
 
 
@@ -253,8 +252,8 @@ class ScriptedPolicy:
                 if not len(rest):
                     continue  # driven to its end: done
                 it.start_m, it.waypoints_m = rest[0].copy(), rest
-            elif it.role == "landing" and not env.score.zone_still_open(it.start_m):
-                continue  # its zone has held its robots: done, as for the zone's own robots
+            elif self._zone_held(it.role, it.start_m):
+                continue  # done, as for the zone's own robots
             it.taken_by, it.audience, reopened = -1, audience.copy(), True
         k = int(env.marking[i])
         if k >= 0:
@@ -267,8 +266,8 @@ class ScriptedPolicy:
         role = int(env.role[i])
         if role in STATIONS:
             goal = self._station_of(i)
-            if role == LANDING and not env.score.zone_still_open(goal):
-                return  # its zone has held its robots: the spares are wanted elsewhere
+            if self._zone_held(ROLES[role], goal):
+                return  # the spares are wanted elsewhere
             self.items.append(WorkItem("route", ROLES[role], goal.copy(), goal[None].copy(),
                                        audience=audience, created_s=t))  # fmt: skip
         elif role == SEARCH:
@@ -276,6 +275,11 @@ class ScriptedPolicy:
             for piece in split_polyline(rest, TAKEOVER_PIECE_M):
                 self.items.append(WorkItem("route", "search", piece[0].copy(), piece, track=True,
                                            audience=audience, created_s=t))  # fmt: skip
+
+    def _zone_held(self, role: str, point: np.ndarray) -> bool:
+        """Whether `point` is a landing station whose zone has held its robots: done for good,
+        whoever was on it (the criterion counts a zone once it has, and so does the plan)."""
+        return role == "landing" and not self.env.score.zone_still_open(point)
 
     def _rest_of_piece(self, i: int, it: WorkItem) -> np.ndarray:
         """What is left of the piece of track `it` that robot i took over: all of it before the
